@@ -1,0 +1,81 @@
+"""Turning what user callables return into casadi ``SX`` of a checked shape."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from .errors import NonFiniteError, NotAffineError, ShapeError
+
+
+def _to_sx(value: Any) -> ca.SX:
+    if isinstance(value, ca.SX):
+        return value
+    if isinstance(value, ca.MX):
+        raise TypeError("MX expressions are not supported; build the expression from the SX symbols passed in")
+    if isinstance(value, (ca.DM, int, float, np.floating, np.integer)):
+        return ca.SX(value)
+    if isinstance(value, np.ndarray) and value.dtype != object:
+        return ca.SX(ca.DM(np.atleast_1d(value).astype(float)))
+    if isinstance(value, (Sequence, np.ndarray)):
+        rows = [v for v in value]
+        if rows and all(isinstance(r, (Sequence, np.ndarray)) and not isinstance(r, str) for r in rows):
+            return ca.vertcat(*[ca.horzcat(*[_to_sx(e) for e in r]) for r in rows])
+        return ca.vertcat(*[_to_sx(r) for r in rows]) if rows else ca.SX(0, 1)
+    raise TypeError(f"cannot turn a {type(value).__name__} into a casadi expression")
+
+
+def as_expression(value: Any, shape: tuple[int | None, int | None], what: str) -> ca.SX:
+    """Return ``value`` as an SX of ``shape`` (``None`` = any size), or raise :class:`ShapeError`.
+
+    A scalar is accepted where a ``(1, 1)``, ``(1, None)`` or ``(None, 1)`` shape is asked,
+    and a column vector of length ``n`` where a row ``(1, n)`` is asked (and vice versa),
+    because users write ``[1, 0]`` for both.
+    """
+    try:
+        expr = _to_sx(value)
+    except TypeError as exc:
+        raise ShapeError(f"{what} returned {value!r}: {exc}") from None
+    rows, cols = shape
+    if rows == 1 and expr.size2() == 1 and (cols is None or expr.size1() == cols) and expr.size1() != 1:
+        expr = expr.T
+    elif cols == 1 and expr.size1() == 1 and expr.size2() != 1:
+        expr = expr.T
+    if (rows is not None and expr.size1() != rows) or (cols is not None and expr.size2() != cols):
+        want = f"({'any' if rows is None else rows}, {'any' if cols is None else cols})"
+        raise ShapeError(f"{what} returned shape {expr.shape}, expected {want}")
+    return ca.densify(expr)
+
+
+def evaluate(fn: Callable[..., Any], args: Sequence[Any], shape: tuple[int | None, int | None], what: str) -> ca.SX:
+    """Call a user callable on symbols and check its result's shape."""
+    try:
+        value = fn(*args)
+    except (TypeError, IndexError, AttributeError) as exc:
+        raise ShapeError(
+            f"{what} could not be evaluated on casadi symbols ({type(exc).__name__}: {exc}); "
+            "write it with casadi operations (ca.sin, ca.dot, ...) and index only within its size"
+        ) from exc
+    return as_expression(value, shape, what)
+
+
+def require_affine_in(expr: ca.SX, v: ca.SX, what: str) -> None:
+    """Raise :class:`NotAffineError` unless ``expr`` is affine in ``v``."""
+    if ca.depends_on(ca.jacobian(expr, v), v):
+        raise NotAffineError(
+            f"{what} must be affine in the velocities (its ∂/∂v depends on v); "
+            "write it as N_v(q, t) v + N_0(q, t)"
+        )
+
+
+def check_constant_matrix(name: str, value: Any, shape: tuple[int, int]) -> np.ndarray:
+    """A numeric matrix parameter: finite, of the given shape."""
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != shape:
+        raise ShapeError(f"{name} has shape {arr.shape}, expected {shape}")
+    if not np.all(np.isfinite(arr)):
+        raise NonFiniteError(f"{name} contains NaN or inf: {arr.tolist()}")
+    return arr

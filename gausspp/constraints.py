@@ -1,0 +1,106 @@
+"""Constraints: velocity-level ``Φ(q, v, t) = 0`` and holonomic ``g(q, t) = 0``.
+
+Along a motion a constraint is differentiated once more (paper eq. (11)):
+``J q̈ = φ`` with ``J = ∂Φ/∂v`` and ``φ = −(∂Φ/∂q · q̇ + ∂Φ/∂t)``. A holonomic constraint
+enters as ``Φ = ġ = ∂g/∂q · q̇ + ∂g/∂t`` and keeps ``g`` for drift correction.
+How the constraint is *realized* — which reaction keeps it — is its ``realization``
+(:mod:`gausspp.realizations`); the default is ideal.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+
+from ._symbolic import evaluate
+from .frontends import Mechanism
+from .realizations import Realization, as_realization
+
+
+@dataclass(frozen=True)
+class ConstraintExpressions:
+    """Symbolic pieces of one constraint on one mechanism.
+
+    Attributes
+    ----------
+    Phi : (k,) SX
+        The velocity-level constraint ``Φ(q, v, t)``.
+    J : (k, nv) SX
+        ``∂Φ/∂v``.
+    phi : (k,) SX
+        Right-hand side of ``J q̈ = φ``: ``−(∂Φ/∂q · q̇ + ∂Φ/∂t)``.
+    g : (k,) SX or None
+        The holonomic constraint ``g(q, t)``, if any.
+    """
+
+    Phi: ca.SX
+    J: ca.SX
+    phi: ca.SX
+    g: ca.SX | None
+
+
+class Constraint:
+    """A velocity-level constraint ``Φ(q, v, t) = 0`` with ``k`` components.
+
+    Parameters
+    ----------
+    phi : callable ``(q, v, t) -> (k,)``
+        The constraint function, written with casadi operations.
+    name : str, optional
+        Used in messages and reports.
+    realization : Realization or str, optional
+        How the constraint is kept (default: :class:`~gausspp.Ideal`).
+    """
+
+    def __init__(
+        self,
+        phi: Callable[..., Any],
+        name: str | None = None,
+        realization: Realization | str | None = None,
+    ) -> None:
+        self._phi = phi
+        self.name = name
+        self.realization = as_realization(realization)
+
+    def expressions(self, mech: Mechanism) -> ConstraintExpressions:
+        """Build ``Φ``, ``J`` and ``φ`` on a mechanism's symbols."""
+        Phi = evaluate(self._phi, (mech.q, mech.v, mech.t), (None, 1), f"constraint {self.name!r}: Φ(q, v, t)")
+        return _differentiate(Phi, mech, g=None)
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(name={self.name!r}, realization={self.realization!r})"
+
+
+class Holonomic(Constraint):
+    """A position-level constraint ``g(q, t) = 0``, entering as ``Φ = ġ``.
+
+    Parameters
+    ----------
+    g : callable ``(q, t) -> (k,)``
+        The constraint function.
+    name, realization :
+        As for :class:`Constraint`.
+    """
+
+    def __init__(
+        self,
+        g: Callable[..., Any],
+        name: str | None = None,
+        realization: Realization | str | None = None,
+    ) -> None:
+        super().__init__(lambda q, v, t: None, name=name, realization=realization)
+        self._g = g
+
+    def expressions(self, mech: Mechanism) -> ConstraintExpressions:
+        g = evaluate(self._g, (mech.q, mech.t), (None, 1), f"constraint {self.name!r}: g(q, t)")
+        Phi = ca.jacobian(g, mech.q) @ mech.qdot + ca.jacobian(g, mech.t)
+        return _differentiate(Phi, mech, g=g)
+
+
+def _differentiate(Phi: ca.SX, mech: Mechanism, g: ca.SX | None) -> ConstraintExpressions:
+    J = ca.jacobian(Phi, mech.v)
+    phi = -(ca.jacobian(Phi, mech.q) @ mech.qdot + ca.jacobian(Phi, mech.t))
+    return ConstraintExpressions(Phi=Phi, J=J, phi=phi, g=g)

@@ -1,0 +1,67 @@
+"""Project exceptions and warnings.
+
+Every error raised by gausspp derives from :class:`GaussppError`. Errors caused by
+what the user passed also derive from :class:`ValueError`, so ``except ValueError``
+keeps working for callers who do not know this library. Messages say *what* is
+wrong, *where* (time, constraint, parameter) and *how* to fix it.
+"""
+
+from __future__ import annotations
+
+
+class GaussppError(Exception):
+    """Root of every gausspp exception."""
+
+
+class InputError(GaussppError, ValueError):
+    """Something the user passed is malformed (shape, type, value)."""
+
+
+class ShapeError(InputError):
+    """An array or a symbolic expression has the wrong shape."""
+
+
+class NonFiniteError(InputError):
+    """A NaN or an infinity was passed in, or appeared in the model's output."""
+
+
+class NotPositiveDefiniteError(InputError):
+    """The kinetic-energy matrix ``A`` is not symmetric positive definite."""
+
+
+class NotAffineError(InputError):
+    """A function that must be affine in the velocities is not."""
+
+
+class MissingMultiplierError(InputError):
+    """A realization with λ as state (inertial, vakonomic, mixed) lacks ``lam0``."""
+
+
+class UnknownNameError(InputError):
+    """An unknown backend, scene, method or realization name was requested."""
+
+
+class RealizabilityError(GaussppError):
+    """The step matrix ``S = J A⁻¹ D`` is singular: the realization cannot keep the constraint.
+
+    Conditions (12) and (16) of the paper. Attributes give the time, the constraint
+    most involved and the margin.
+    """
+
+    def __init__(self, message: str, *, t: float, constraint: str, margin: float) -> None:
+        super().__init__(message)
+        self.t = t
+        self.constraint = constraint
+        self.margin = margin
+
+
+class QPSolveError(GaussppError):
+    """A QP backend did not return a solution of the requested accuracy."""
+
+
+class BackendUnavailableError(GaussppError, ImportError):
+    """A known QP backend is not installed on this machine."""
+
+
+class RealizabilityWarning(UserWarning):
+    """The realizability margin is small: the reaction is large and ill-determined."""

@@ -1,0 +1,244 @@
+"""Realizations: how a constraint is kept, and so which motion it produces (DESIGN §2).
+
+Every realization gives the per-step reaction the same shape::
+
+    A q̈ + h = F + r₀ + D u,      J q̈ = φ
+
+with ``u`` the step's unknowns, ``D`` the reaction directions and ``r₀`` the part of the
+reaction already known from the state (for realizations that carry ``λ`` as a state,
+``u = λ̇``). Adding a realization means writing one small subclass of
+:class:`Realization`.
+
+=====================  ========  =====================================  ==================
+realization            paper     reaction R                             virtual displ.
+=====================  ========  =====================================  ==================
+Ideal                  (2)–(4)   ``Jᵀ λ``                               ``J δx = 0``
+Force(M) (Béghin)      (10)      ``Mᵀ λ``                               ``M δx = 0``
+Inertial(N)            (14)      ``−λ̇ N_v − λ [N]``                     (20) with M = 0
+Vakonomic              (17)      inertial with ``N = Φ``                ``δΦ = 0``
+Mixed, proportional    (19)      ``−λ̇ N_v − λ [N] + λ M``               ``δN + M δx = 0``
+Mixed, rate            (22)      ``−λ̇ N_v − λ [N] + λ̇ M``               ``δN − (M δx)˙ = 0``
+=====================  ========  =====================================  ==================
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import casadi as ca
+import numpy as np
+
+from ._symbolic import evaluate, require_affine_in
+from .errors import InputError, NonFiniteError, ShapeError, UnknownNameError
+
+if TYPE_CHECKING:
+    from .constraints import ConstraintExpressions
+    from .frontends import Mechanism
+
+
+@dataclass(frozen=True)
+class Reaction:
+    """The reaction's per-step form ``R = r₀ + D u``.
+
+    Attributes
+    ----------
+    D : (nv, m) SX
+        Reaction directions (columns).
+    r0 : (nv,) SX
+        Known part (from ``λ`` in the state).
+    """
+
+    D: ca.SX
+    r0: ca.SX
+
+
+class Realization(ABC):
+    """How a constraint is kept. Subclasses fulfil this contract:
+
+    1. ``has_state`` — ``True`` if ``λ`` is carried as a state and ``u = λ̇``
+       (then ``lam0`` holds its initial value, or ``None`` if the user gives it later);
+    2. :meth:`reaction` — given the mechanism, the constraint's expressions and the
+       symbol ``lam`` (size ``k`` when ``has_state``, else size 0), return ``D`` and ``r₀``;
+    3. ``label`` — a short name for tables.
+    """
+
+    has_state: bool = False
+    label: str = "realization"
+    lam0: np.ndarray | None = None
+    #: What to change when the realization cannot keep the constraint (used in messages).
+    hint: str = "choose reaction directions D with J A⁻¹ D nonsingular"
+
+    @abstractmethod
+    def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
+        """The reaction's directions ``D`` and known part ``r₀`` for one constraint."""
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}()"
+
+
+class Ideal(Realization):
+    """Ideal constraint (d'Alembert–Lagrange, eqs. (2)–(4)): ``R = Jᵀλ``, ``δx`` with ``J δx = 0``."""
+
+    label = "ideal"
+    hint = "the constraint rows are dependent (redundant constraints): remove the redundant rows"
+
+    def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
+        return Reaction(D=c.J.T, r0=ca.SX.zeros(mech.nv))
+
+
+def _matrix(fn: Callable[..., Any], mech: Mechanism, k: int, what: str) -> ca.SX:
+    return evaluate(fn, (mech.q, mech.v, mech.t), (k, mech.nv), what)
+
+
+def _initial(lam0: Any) -> np.ndarray | None:
+    if lam0 is None:
+        return None
+    arr = np.atleast_1d(np.asarray(lam0, dtype=float))
+    if arr.ndim != 1:
+        raise ShapeError(f"lam0 must be a vector, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise NonFiniteError(f"lam0 contains NaN or inf: {arr.tolist()}")
+    return arr
+
+
+class Force(Realization):
+    """Béghin servo-constraint (eqs. (10), (13)): a controlled force ``R = Mᵀλ``.
+
+    The constraint is kept by an actuator pushing along the rows of ``M``; the virtual
+    displacements are ``M δx = 0``. Realizable iff ``(J A⁻¹ Mᵀ)`` is nonsingular (12).
+
+    Parameters
+    ----------
+    M : callable ``(q, v, t) -> (k, nv)``
+        Force directions, one row per constraint component.
+    """
+
+    label = "force"
+    hint = "choose force directions M with J A⁻¹ Mᵀ nonsingular, i.e. M not A-orthogonal to ∂Φ/∂v (condition (12))"
+
+    def __init__(self, M: Callable[..., Any]) -> None:
+        self.M = M
+
+    def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
+        M = _matrix(self.M, mech, c.J.shape[0], "Force: M(q, v, t)")
+        return Reaction(D=M.T, r0=ca.SX.zeros(mech.nv))
+
+
+class Inertial(Realization):
+    """Inertial (flywheel) realization (eqs. (14)–(15)): ``T* = T + λ N``.
+
+    The constraint is kept by changing the inertia: ``λ`` (e.g. a rotor's relative angular
+    momentum) is a state with ``λ(t₀) = lam0``; the reaction is ``R = −λ̇ N_v − λ [N]``.
+    Realizable iff ``J A⁻¹ N_vᵀ`` is nonsingular (16).
+
+    Parameters
+    ----------
+    N : callable ``(q, v, t) -> (k,)``
+        Affine in the velocities.
+    lam0 : (k,) array, optional
+        Initial ``λ``; may also be given to ``step``/``simulate``.
+    """
+
+    has_state = True
+    label = "inertial"
+    hint = "choose N with J A⁻¹ N_vᵀ nonsingular (condition (16)), e.g. a rotor axis not A-orthogonal to ∂Φ/∂v"
+
+    def __init__(self, N: Callable[..., Any], lam0: Any = None) -> None:
+        self.N = N
+        self.lam0 = _initial(lam0)
+
+    def _N(self, mech: Mechanism, c: ConstraintExpressions) -> ca.SX:
+        N = evaluate(self.N, (mech.q, mech.v, mech.t), (c.J.shape[0], 1), f"{type(self).__name__}: N(q, v, t)")
+        require_affine_in(N, mech.v, f"{type(self).__name__}: N(q, v, t)")
+        return N
+
+    def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
+        N = self._N(mech, c)
+        return Reaction(D=-ca.jacobian(N, mech.v).T, r0=-mech.lagrange_rows(N).T @ lam)
+
+
+class Vakonomic(Inertial):
+    """Vakonomic realization (eqs. (17)–(18)): the inertial one with ``N = Φ``.
+
+    Parameters
+    ----------
+    lam0 : (k,) array, optional
+        Initial multiplier.
+    """
+
+    label = "vakonomic"
+
+    def __init__(self, lam0: Any = None) -> None:
+        self.lam0 = _initial(lam0)
+
+    def _N(self, mech: Mechanism, c: ConstraintExpressions) -> ca.SX:
+        require_affine_in(c.Phi, mech.v, "Vakonomic: the constraint Φ")
+        return c.Phi
+
+
+class Mixed(Realization):
+    """Mixed realization: inertia and a controlled force together (eqs. (19)–(22)).
+
+    ``law="proportional"`` (19), force multiplier ``λ′ = λ``:
+    ``R = −λ̇ N_v − λ[N] + Mᵀλ``, virtual displacements ``δN + M δx = 0`` (20).
+    ``law="rate"`` (22), ``λ′ = λ̇``: ``R = −λ̇ N_v − λ[N] + Mᵀλ̇``, virtual displacements
+    ``δN − (M δx)˙ = 0``.
+
+    Parameters
+    ----------
+    N : callable ``(q, v, t) -> (k,)``
+        Affine in the velocities.
+    M : callable ``(q, v, t) -> (k, nv)``
+        Force directions.
+    law : {"proportional", "rate"}
+    lam0 : (k,) array, optional
+    """
+
+    has_state = True
+    laws = ("proportional", "rate")
+    hint = "choose N (and for law='rate' also M) so that J A⁻¹ D is nonsingular (condition (16))"
+
+    def __init__(
+        self, N: Callable[..., Any], M: Callable[..., Any], law: str = "proportional", lam0: Any = None
+    ) -> None:
+        if law not in self.laws:
+            raise UnknownNameError(f"Mixed: law={law!r} is unknown; use one of {list(self.laws)}")
+        self.N, self.M, self.law = N, M, law
+        self.lam0 = _initial(lam0)
+        self.label = f"mixed-{law}"
+
+    def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
+        k = c.J.shape[0]
+        N = evaluate(self.N, (mech.q, mech.v, mech.t), (k, 1), "Mixed: N(q, v, t)")
+        require_affine_in(N, mech.v, "Mixed: N(q, v, t)")
+        M = _matrix(self.M, mech, k, "Mixed: M(q, v, t)")
+        inertial = -mech.lagrange_rows(N).T @ lam
+        D = -ca.jacobian(N, mech.v).T
+        if self.law == "proportional":
+            return Reaction(D=D, r0=inertial + M.T @ lam)
+        return Reaction(D=D + M.T, r0=inertial)
+
+    def __repr__(self) -> str:
+        return f"Mixed(law={self.law!r})"
+
+
+_BY_NAME: dict[str, Callable[[], Realization]] = {"ideal": Ideal, "vakonomic": Vakonomic}
+
+
+def as_realization(value: Realization | str | None) -> Realization:
+    """Accept an instance, ``None`` (ideal) or a name of a parameter-free realization."""
+    if value is None:
+        return Ideal()
+    if isinstance(value, Realization):
+        return value
+    if isinstance(value, str):
+        if value in _BY_NAME:
+            return _BY_NAME[value]()
+        raise UnknownNameError(
+            f"realization={value!r} is unknown; by name only {sorted(_BY_NAME)} can be given, "
+            "the others need their data: Force(M=...), Inertial(N=..., lam0=...), Mixed(N=..., M=..., law=...)"
+        )
+    raise InputError(f"realization must be a Realization or a name, got {type(value).__name__}")

@@ -1,0 +1,65 @@
+"""A rigid body about a fixed point kept by a servo torque (paper §2, DESIGN §6.2).
+
+Constraint ``(ω, l) = 0`` (body axes), kept by a torque ``λ n`` along the body axis ``n``
+(Béghin realization, ``M = nᵀ``). Realizable iff ``(I⁻¹ n, l) ≠ 0`` — this is ``n ⟂̸ l`` only
+when ``l`` is a principal axis; the paper's "orthogonal" is that special case.
+``n = l`` is Suslov's nonholonomic problem (the ideal realization).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..constraints import Constraint
+from ..errors import InputError, ShapeError
+from ..frontends import RigidBody
+from ..model import Model
+from ..realizations import Force
+from ._scene import Scene
+
+
+def _unit(name: str, value: Any) -> np.ndarray:
+    vec = np.asarray(value, dtype=float).ravel()
+    if vec.shape != (3,):
+        raise ShapeError(f"rigid-body-servo: {name} must have 3 components, got {vec.size}")
+    norm = np.linalg.norm(vec)
+    if not np.isfinite(norm) or norm == 0:
+        raise InputError(f"rigid-body-servo: {name} must be a finite nonzero vector, got {vec.tolist()}")
+    return vec / norm
+
+
+def build(
+    inertia: Any = (1.0, 2.0, 3.0),
+    l: Any = (1.0, 1.0, 1.0),
+    n: Any = None,
+    omega0: Any = (1.0, -0.5, 0.2),
+    t_end: float = 10.0,
+) -> Scene:
+    """Rigid body with a servo torque along ``n`` keeping ``(ω, l) = 0``; ``n=None`` means ``n = l`` (Suslov).
+
+    ``inertia`` is a 3-vector of principal moments or a 3×3 tensor; ``omega0`` is projected onto
+    the plane ``(ω, l) = 0`` so that the initial data lie on the constraint.
+    """
+    I = np.diag(np.asarray(inertia, float)) if np.ndim(inertia) == 1 else np.asarray(inertia, float)
+    l_ = _unit("l", l)
+    n_ = l_ if n is None else _unit("n", n)
+    body = RigidBody(inertia=I)
+    servo = Force(M=lambda q, w, t: ca.DM(n_).T)
+    model = Model(body, [Constraint(lambda q, w, t: ca.dot(w, ca.DM(l_)), name="(ω, l) = 0", realization=servo)])
+    w0 = np.asarray(omega0, float).ravel()
+    w0 = w0 - np.dot(w0, l_) * l_
+    suslov = n is None or np.allclose(n_, l_)
+    return Scene(
+        name="rigid-body-servo",
+        model=model,
+        q0=np.array([1.0, 0.0, 0.0, 0.0]),
+        v0=w0,
+        lam0=None,
+        t_end=t_end,
+        exact=None,
+        description="rigid body, servo torque along n keeping (ω, l) = 0; n = l is Suslov's problem; paper §2",
+        params=dict(inertia=I.tolist(), l=l_.tolist(), n=n_.tolist(), suslov=suslov, t_end=t_end),
+    )
