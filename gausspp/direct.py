@@ -14,11 +14,15 @@ from .step import Reduced
 
 
 def direct_reaction(red: Reduced) -> ca.SX:
-    """``u`` solving ``S u = φ − J a₀`` (symbolic)."""
-    k, m = red.S.shape
+    """The whitened reaction ``z = R_D u`` solving ``Ŝ z = L_J⁻¹(φ − J a₀)`` (symbolic).
+
+    ``Ŝ`` is ``S`` with the scales of ``J`` and ``D`` in the kinetic metric divided out; its
+    condition number is ``1/margin``, whereas ``S`` inherits the condition number of ``A``.
+    """
+    k, m = red.S_hat.shape
     if k != m:
         raise InputError(
             f"solver='direct' needs as many reaction directions as constraint components, got {m} for {k}; "
             "use solver='qp', which finds the least-compulsion reaction"
         )
-    return ca.solve(red.S, red.rhs)
+    return ca.solve(red.S_hat, red.rhs_hat)

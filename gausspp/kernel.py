@@ -113,13 +113,13 @@ def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str
     if solver == "direct":
         return CompiledKernel(ca.Function(f"{name}_direct", inputs, outputs(p, red, direct_reaction(red), None)))
     assert backend is not None
-    m, k = red.S.shape[1], red.S.shape[0]
-    u, y = ca.SX.sym("u", m), ca.SX.sym("y", k)
-    build = ca.Function(f"{name}_qp_data", inputs, [red.H, red.S, red.rhs])
-    finish = ca.Function(f"{name}_qp_finish", [*inputs, u, y], outputs(p, red, u, y))
+    k, m = red.S_hat.shape
+    z, y = ca.SX.sym("z", m), ca.SX.sym("y", k)
+    build = ca.Function(f"{name}_qp_data", inputs, [ca.SX.eye(m), red.S_hat, red.rhs_hat])
+    finish = ca.Function(f"{name}_qp_finish", [*inputs, z, y], outputs(p, red, z, y))
     if not backend.compiled:
         return PythonQPKernel(build, finish, backend)
     mx_in = [ca.MX.sym(f"in{i}", s.sparsity()) for i, s in enumerate(inputs)]
     H, S, rhs = build(*mx_in)
-    u_mx, y_mx = backend.graph(H, S, rhs)
-    return CompiledKernel(ca.Function(f"{name}_qp", mx_in, finish(*mx_in, u_mx, y_mx)))
+    z_mx, y_mx = backend.graph(H, S, rhs)
+    return CompiledKernel(ca.Function(f"{name}_qp", mx_in, finish(*mx_in, z_mx, y_mx)))

@@ -52,15 +52,17 @@ class StepExpressions:
 
 @dataclass(frozen=True)
 class Reduced:
-    """The step in reaction space, see the module docstring."""
+    """The step in whitened reaction space, see the module docstring.
 
-    H: ca.SX
-    S: ca.SX
-    rhs: ca.SX
+    ``S_hat z = rhs_hat`` with ``z = R_D u`` (``R_DᵀR_D = H``), so that ``Z = ‖z‖²``.
+    """
+
+    S_hat: ca.SX
+    rhs_hat: ca.SX
+    RD: ca.SX
     a0: ca.SX
     AinvD: ca.SX
     a_free: ca.SX
-    S_hat: ca.SX
     pivot: ca.SX
 
 
@@ -70,48 +72,47 @@ def _solve_upper(R: ca.SX, B: ca.SX) -> ca.SX:
 
 
 def reduce(p: StepExpressions) -> Reduced:
-    """Eliminate the acceleration: reaction-space data, realizability, positive-definiteness check."""
+    """Eliminate the acceleration: whitened reaction-space data and the positive-definiteness check."""
     R = ca.chol(p.A)
     a_free = _solve_upper(R, p.f)
     a0 = _solve_upper(R, p.f + p.r0)
-    AinvD = _solve_upper(R, p.D)
-    AinvJt = _solve_upper(R, p.J.T)
-    H = p.D.T @ AinvD
-    S = p.J @ AinvD
-    RJ = ca.chol(p.J @ AinvJt)
-    RD = ca.chol(H)
-    S_hat = ca.solve(RD, ca.solve(RJ.T, S).T).T
+    W = ca.solve(R.T, p.D)  # R⁻ᵀD, so H = WᵀW is formed as a sum of squares
+    AinvD = ca.solve(R, W)
+    Jt = ca.solve(R.T, p.J.T).T  # J R⁻¹
+    RJ = ca.chol(Jt @ Jt.T)
+    RD = ca.chol(W.T @ W)
+    S_hat = ca.solve(RD.T, ca.solve(RJ.T, Jt @ W).T).T
+    rhs_hat = ca.solve(RJ.T, p.phi - p.J @ a0)
     diagR = ca.diag(R)
-    # Relative smallest pivot: NaN or ≤ 0 when A is not positive definite.
-    # (casadi's fmin ignores NaN, so NaN from a failed factorization is added back explicitly)
+    # Relative smallest pivot: NaN or ≤ 0 when A is not positive definite
+    # (casadi's fmin ignores NaN, so NaN from a failed factorization is added back explicitly).
     pivot = ca.mmin(diagR * diagR) / ca.mmax(ca.fabs(ca.diag(p.A))) + ca.sum1(diagR * 0)
     if not ca.is_equal(p.A, p.A.T, 20):
         asym = ca.mmax(ca.fabs(p.A - p.A.T)) / ca.mmax(ca.fabs(p.A))
         pivot = ca.if_else(asym > 1e-12, -1.0, pivot)
-    return Reduced(H=H, S=S, rhs=p.phi - p.J @ a0, a0=a0, AinvD=AinvD, a_free=a_free, S_hat=S_hat, pivot=pivot)
+    return Reduced(S_hat=S_hat, rhs_hat=rhs_hat, RD=RD, a0=a0, AinvD=AinvD, a_free=a_free, pivot=pivot)
 
 
 #: Names of a step kernel's outputs, in order.
 OUTPUTS = ("a", "u", "reaction", "compulsion", "S_hat", "residual", "Phi", "pivot", "a_free", "qp_primal", "qp_dual")
 
 
-def outputs(p: StepExpressions, red: Reduced, u: ca.SX, y: ca.SX | None) -> list[ca.SX]:
-    """Everything a step reports, given the reaction unknowns ``u`` (and QP multipliers ``y``)."""
+def outputs(p: StepExpressions, red: Reduced, z: ca.SX, y: ca.SX | None) -> list[ca.SX]:
+    """Everything a step reports, given the whitened reaction ``z`` (and the QP's multipliers ``y``)."""
+    u = ca.solve(red.RD, z)
     a = red.a0 + red.AinvD @ u
     if y is None:
         primal = dual = ca.SX(0)
     else:  # relative residuals: scale-free, so one threshold fits every model
         tiny = 1e-300
-        size_S, size_u = ca.mmax(ca.fabs(red.S)), ca.mmax(ca.fabs(u))
-        primal = ca.mmax(ca.fabs(red.S @ u - red.rhs)) / (ca.mmax(ca.fabs(red.rhs)) + size_S * size_u + tiny)
-        dual = ca.mmax(ca.fabs(red.H @ u + red.S.T @ y)) / (
-            ca.mmax(ca.fabs(red.H)) * size_u + size_S * ca.mmax(ca.fabs(y)) + tiny
-        )
+        size_S, size_z = ca.mmax(ca.fabs(red.S_hat)), ca.mmax(ca.fabs(z))
+        primal = ca.mmax(ca.fabs(red.S_hat @ z - red.rhs_hat)) / (ca.mmax(ca.fabs(red.rhs_hat)) + size_S * size_z + tiny)
+        dual = ca.mmax(ca.fabs(z + red.S_hat.T @ y)) / (size_z + size_S * ca.mmax(ca.fabs(y)) + tiny)
     return [
         a,
         u,
         p.r0 + p.D @ u,
-        u.T @ red.H @ u,
+        ca.sumsqr(z),
         red.S_hat,
         p.J @ a - p.phi,
         p.Phi,

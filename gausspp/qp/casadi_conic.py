@@ -33,7 +33,7 @@ PLUGINS: dict[str, tuple[dict[str, Any], str]] = {
         "operator splitting (OSQP) with polishing",
     ),
     "proxqp": ({"proxqp": {"eps_abs": 1e-12, "eps_rel": 0.0}}, "proximal augmented Lagrangian (ProxQP)"),
-    "piqp": ({}, "proximal interior point (PIQP)"),
+    "piqp": ({"piqp": {"eps_abs": 1e-12, "eps_rel": 1e-12}}, "proximal interior point (PIQP)"),
     "highs": ({"highs": {"output_flag": False}}, "HiGHS (LP/QP); slow and ~1e-8 accurate here"),
 }
 

@@ -17,7 +17,7 @@ from ._base import QPBackend
 
 #: Options that make each solver accurate enough to agree with the direct solve.
 OPTIONS: dict[str, dict[str, Any]] = {
-    "osqp": {"eps_abs": 1e-12, "eps_rel": 1e-12, "polishing": True, "max_iter": 20000},
+    "osqp": {"eps_abs": 1e-12, "eps_rel": 1e-12, "polishing": True, "max_iter": 20000, "raise_error": False},
     "proxqp": {"eps_abs": 1e-12, "eps_rel": 0.0},
     "clarabel": {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-12, "tol_feas": 1e-12},
     "piqp": {"eps_abs": 1e-12, "eps_rel": 1e-12},
