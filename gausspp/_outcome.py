@@ -99,6 +99,18 @@ def _unrealizable(data: StepProblem, t: float, margin: float, groups: list[Group
     )
 
 
+def evaluation_failed(exc: RuntimeError, *, t: float, solver: str, groups: list[Group], data: Callable[[], StepProblem], margin_error: float) -> Exception:
+    """The compiled step raised (a QP plugin refuses NaN data, say): find the cause in the data."""
+    d = data()
+    _check_data(d, t, groups)
+    if not np.all(np.linalg.eigvalsh(0.5 * (d.A + d.A.T)) > 0) or not np.allclose(d.A, d.A.T, rtol=1e-12, atol=0):
+        return _not_positive_definite(d, t)
+    margin = float(np.min(cosines(d.A, d.J, d.D), initial=0.0))
+    if margin < margin_error:
+        return _unrealizable(d, t, margin, groups, margin_error)
+    return QPSolveError(f"the step failed {_where(t)} in {solver}: {str(exc).strip().splitlines()[-1]}")
+
+
 def to_result(
     out: dict[str, np.ndarray],
     *,

@@ -54,7 +54,7 @@ def evaluate(fn: Callable[..., Any], args: Sequence[Any], shape: tuple[int | Non
     """Call a user callable on symbols and check its result's shape."""
     try:
         value = fn(*args)
-    except (TypeError, IndexError, AttributeError) as exc:
+    except (TypeError, IndexError, AttributeError, RuntimeError) as exc:  # casadi raises RuntimeError
         raise ShapeError(
             f"{what} could not be evaluated on casadi symbols ({type(exc).__name__}: {exc}); "
             "write it with casadi operations (ca.sin, ca.dot, ...) and index only within its size"

@@ -15,7 +15,7 @@ import casadi as ca
 import numpy as np
 
 from . import qp
-from ._outcome import Group, to_result
+from ._outcome import Group, evaluation_failed, to_result
 from .constraints import Constraint
 from .errors import InputError, MissingMultiplierError, NonFiniteError, ShapeError, UnknownNameError
 from .frontends import Mechanism
@@ -154,10 +154,10 @@ class Model:
             raise UnknownNameError(f"solver={solver!r} is unknown; use one of {list(SOLVERS)}")
         if solver == "direct" and backend is not None:
             raise InputError(f"backend={backend!r} applies to solver='qp' only")
-        name = qp.get(backend).name if solver == "qp" else None
-        key = (solver, name)
-        if key not in self._kernels:
-            self._kernels[key] = build_kernel("step", self._inputs, self._expressions, solver, qp.get(name) if name else None)
+        chosen = qp.get(backend) if solver == "qp" else None
+        key = (solver, chosen.name if chosen else None)
+        if key not in self._kernels or (chosen is not None and getattr(self._kernels[key], "backend", chosen) is not chosen):
+            self._kernels[key] = build_kernel("step", self._inputs, self._expressions, solver, chosen)
         return self._kernels[key]
 
     # -- checked entry points ---------------------------------------------------------------
@@ -207,16 +207,13 @@ class Model:
         """
         t, q, v, lam = self._state(t, q, v, lam)
         kernel = self.kernel(solver, backend)
-        out = kernel(t, q, v, lam)
-        return to_result(
-            out,
-            t=t,
-            solver="direct" if solver == "direct" else qp.get(backend).name,
-            groups=self._groups,
-            data=lambda: self.step_data(t, q, v, lam),
-            margin_warn=self.margin_warn,
-            margin_error=self.margin_error,
-        )
+        name = "direct" if solver == "direct" else qp.get(backend).name
+        where = dict(t=t, solver=name, groups=self._groups, data=lambda: self.step_data(t, q, v, lam))
+        try:
+            out = kernel(t, q, v, lam)
+        except RuntimeError as exc:  # casadi refused to evaluate (e.g. a QP plugin given NaN data)
+            raise evaluation_failed(exc, margin_error=self.margin_error, **where) from None
+        return to_result(out, margin_warn=self.margin_warn, margin_error=self.margin_error, **where)
 
     def step_data(self, t: float, q: Any, v: Any, lam: Any = None) -> StepProblem:
         """The step's ``A, f = F − h, r₀, J, φ, D, Φ`` as numbers (no checks on their values)."""
