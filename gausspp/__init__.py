@@ -8,7 +8,7 @@ compulsion as a QP and is cross-checked against the direct multiplier solution.
 
 from __future__ import annotations
 
-from . import qp, scenes
+from . import qp, realizability, scenes
 from .constraints import Constraint, Holonomic
 from .errors import (
     GaussppError,
@@ -59,6 +59,7 @@ __all__ = [
     "UnknownNameError",
     "Vakonomic",
     "qp",
+    "realizability",
     "scenes",
     "solve",
 ]

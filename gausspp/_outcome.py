@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 
 from .errors import NonFiniteError, NotPositiveDefiniteError, QPSolveError, RealizabilityError, RealizabilityWarning
+from .realizability import cosines
 from .results import StepResult
 
 if TYPE_CHECKING:
@@ -31,18 +32,6 @@ class Group(NamedTuple):
     cols: slice
     hint: str
     label: str = ""
-
-
-def cosines(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> np.ndarray:
-    """Cosines of the principal angles between ``range(Jᵀ)`` and ``range(D)`` in the metric ``A⁻¹``."""
-    try:
-        AinvD = np.linalg.solve(A, D)
-        LJ = np.linalg.cholesky(J @ np.linalg.solve(A, J.T))
-        LD = np.linalg.cholesky(D.T @ AinvD)
-    except np.linalg.LinAlgError:
-        return np.zeros(min(J.shape[0], D.shape[1]))
-    S_hat = np.linalg.solve(LD, np.linalg.solve(LJ, J @ AinvD).T).T
-    return np.linalg.svd(S_hat, compute_uv=False)
 
 
 def _where(t: float) -> str:

@@ -1,0 +1,54 @@
+"""The README example runs; the examples run and write their figures; the CLI answers."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from gausspp import cli
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_readme_example_runs(capsys: pytest.CaptureFixture[str]) -> None:
+    text = (ROOT / "README.md").read_text()
+    code = re.search(r"```python\n(.*?)```", text, re.S)
+    assert code is not None
+    exec(compile(code.group(1), "README.md", "exec"), {})
+    out = capsys.readouterr().out.splitlines()
+    assert out[0].startswith("rod [0.5 0.5]") and out[1].startswith("servo [0.66666667 0.66666667]")
+
+
+@pytest.mark.parametrize("script", sorted(p.name for p in (ROOT / "examples").glob("*.py")))
+def test_example_runs(script: str, tmp_path: Path) -> None:
+    result = subprocess.run(
+        [sys.executable, str(ROOT / "examples" / script), str(tmp_path / "figure.png")],
+        capture_output=True, text=True, timeout=60, cwd=tmp_path,
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip()
+    for png in tmp_path.glob("*.png"):
+        assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 1000
+
+
+def test_demo_table(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli.main(["demo"]) == 0
+    out = capsys.readouterr().out
+    rows = [line for line in out.splitlines() if line.startswith(("two-masses", "rigid-body-servo"))]
+    assert len(rows) == 8
+    qp_rows = [r for r in rows if " qp " in r]
+    assert all(float(r.split()[-2]) < 1e-12 for r in qp_rows)  # QP vs direct column
+
+
+def test_scenes_listing(capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli.main(["scenes"]) == 0
+    assert "two-masses" in capsys.readouterr().out
+
+
+def test_cli_bad_usage_exits_2() -> None:
+    result = subprocess.run([sys.executable, "-m", "gausspp.cli", "nonsense"], capture_output=True, text=True)
+    assert result.returncode == 2 and "invalid choice" in result.stderr
