@@ -112,7 +112,7 @@ def to_result(
 ) -> StepResult:
     """Check a kernel's outputs and package them; raise a project error on failure."""
     pivot = float(out["pivot"][0])
-    finite = all(np.all(np.isfinite(v)) for k, v in out.items() if k != "S_hat")
+    finite = bool(np.isfinite(out["checksum"][0]))
     if not (pivot > 0) or not finite:
         d = data()
         _check_data(d, t, groups)
@@ -120,11 +120,16 @@ def to_result(
             raise _not_positive_definite(d, t)
     S_hat = out["S_hat"]
     k, m = S_hat.shape if S_hat.ndim == 2 else (S_hat.size, 1)
-    cos = np.linalg.svd(S_hat.reshape(k, m), compute_uv=False) if np.all(np.isfinite(S_hat)) else np.zeros(min(k, m))
+    if not finite and not np.isfinite(S_hat.sum()):
+        cos = np.zeros(min(k, m))
+    elif k == 1:  # the singular value of one row is its length
+        cos = np.array([np.sqrt(float(S_hat.ravel() @ S_hat.ravel()))])
+    else:
+        cos = np.linalg.svd(S_hat.reshape(k, m), compute_uv=False)
     margin = float(cos[-1]) if k <= m and cos.size else 0.0
     if margin < margin_error:
         raise _unrealizable(data(), t, margin, groups, margin_error)
-    if not finite:
+    if not finite and not all(np.all(np.isfinite(v)) for name, v in out.items() if name not in ("S_hat", "checksum")):
         raise NonFiniteError(f"the step produced NaN or inf {_where(t)} although its data are finite; margin {margin:.3g}")
     if margin < margin_warn:
         names = ", ".join(repr(g.name) for g in groups)

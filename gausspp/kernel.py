@@ -25,6 +25,7 @@ import numpy as np
 
 from .direct import direct_reaction
 from .qp import QPBackend
+from .qp.casadi_conic import stdout_silenced
 from .step import OUTPUTS, StepExpressions, outputs, reduce
 
 
@@ -40,11 +41,14 @@ class _Bound:
             self._buf.set_arg(i, memoryview(arr))
         for i, arr in enumerate(self.res):
             self._buf.set_res(i, memoryview(arr))
+        # matrix-shaped views of the output buffers, made once (casadi stores column-major)
+        self.outputs = [
+            r.reshape(fn.size_out(i), order="F") if fn.size_out(i)[1] > 1 else r for i, r in enumerate(self.res)
+        ]
 
     def output(self, i: int) -> np.ndarray:
-        """Output ``i`` in its matrix shape (casadi stores column-major)."""
-        shape = self.fn.size_out(i)
-        return self.res[i].reshape(shape, order="F") if shape[1] > 1 else self.res[i]
+        """Output ``i`` in its matrix shape (a view into the bound buffer)."""
+        return self.outputs[i]
 
 
 def _load(targets: Sequence[np.ndarray], values: Sequence[Any]) -> None:
@@ -67,7 +71,7 @@ class CompiledKernel:
 
     def result(self) -> dict[str, np.ndarray]:
         """The last evaluation's outputs, by name (views into the bound buffers)."""
-        return {name: self._f.output(i) for i, name in enumerate(OUTPUTS)}
+        return dict(zip(OUTPUTS, self._f.outputs, strict=True))
 
     def __call__(self, *values: Any) -> dict[str, np.ndarray]:
         _load(self.inputs, values)
@@ -96,7 +100,7 @@ class PythonQPKernel:
 
     def result(self) -> dict[str, np.ndarray]:
         """The last evaluation's outputs, by name."""
-        return {name: self._finish.output(i) for i, name in enumerate(OUTPUTS)}
+        return dict(zip(OUTPUTS, self._finish.outputs, strict=True))
 
     def __call__(self, *values: Any) -> dict[str, np.ndarray]:
         _load(self.inputs, values)
@@ -107,19 +111,31 @@ class PythonQPKernel:
 Kernel = CompiledKernel | PythonQPKernel
 
 
+def _dense(exprs: list[ca.SX]) -> list[ca.SX]:
+    """Outputs with every entry stored: buffers are sized by stored entries, and a structural
+    zero (say, a residual casadi proves to vanish) must still come out as a number."""
+    return [ca.densify(e) for e in exprs]
+
+
 def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str, backend: QPBackend | None) -> Kernel:
     """Compile the step ``p`` (expressions of ``inputs``) for ``solver`` ∈ {"direct", "qp"}."""
     red = reduce(p)
     if solver == "direct":
-        return CompiledKernel(ca.Function(f"{name}_direct", inputs, outputs(p, red, direct_reaction(red), None)))
+        return CompiledKernel(ca.Function(f"{name}_direct", inputs, _dense(outputs(p, red, direct_reaction(red), None))))
     assert backend is not None
     k, m = red.S_hat.shape
     z, y = ca.SX.sym("z", m), ca.SX.sym("y", k)
-    build = ca.Function(f"{name}_qp_data", inputs, [ca.SX.eye(m), red.S_hat, red.rhs_hat])
-    finish = ca.Function(f"{name}_qp_finish", [*inputs, z, y], outputs(p, red, z, y))
+    build = ca.Function(f"{name}_qp_data", inputs, _dense([ca.SX.eye(m), red.S_hat, red.rhs_hat]))
+    finish = ca.Function(f"{name}_qp_finish", [*inputs, z, y], _dense(outputs(p, red, z, y)))
     if not backend.compiled:
         return PythonQPKernel(build, finish, backend)
     mx_in = [ca.MX.sym(f"in{i}", s.sparsity()) for i, s in enumerate(inputs)]
     H, S, rhs = build(*mx_in)
     z_mx, y_mx = backend.graph(H, S, rhs)
-    return CompiledKernel(ca.Function(f"{name}_qp", mx_in, finish(*mx_in, z_mx, y_mx)))
+    kernel = CompiledKernel(ca.Function(f"{name}_qp", mx_in, finish(*mx_in, z_mx, y_mx)))
+    with stdout_silenced():  # some plugins (qpOASES) print a banner on their first solve
+        try:
+            kernel.evaluate()
+        except RuntimeError:
+            pass  # zeros need not be a valid state; this call only primes the plugin
+    return kernel

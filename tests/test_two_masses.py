@@ -71,3 +71,15 @@ def test_servo_reaction_is_not_ideal_and_compulsion_is_its_norm() -> None:
     # Z = (A⁻¹R, R) for N = 0
     assert res.compulsion == pytest.approx(res.reaction[0] ** 2 / M1, rel=1e-14)
     assert res.margin == pytest.approx(np.sqrt(M2 / (M1 + M2)), rel=1e-14)  # cos of the A⁻¹-angle between J and D
+
+
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+@pytest.mark.parametrize("realization", ["ideal", "servo"])
+def test_result_shapes(realization: str, solver: str) -> None:
+    """Every field has its documented shape, even where casadi proves an entry zero."""
+    s = scene(realization)
+    res = s.model.step(0.0, s.q0, s.v0, solver=solver)
+    n, k = 2, 1
+    assert res.a.shape == res.reaction.shape == res.free_acceleration.shape == (n,)
+    assert res.u.shape == res.residual.shape == res.constraint_value.shape == res.cosines.shape == (k,)
+    assert abs(res.residual[0]) < 1e-15 and res.constraint_value[0] == 0.0

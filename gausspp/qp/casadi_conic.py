@@ -39,7 +39,7 @@ PLUGINS: dict[str, tuple[dict[str, Any], str]] = {
 
 
 @contextlib.contextmanager
-def _stdout_silenced() -> Iterator[None]:
+def stdout_silenced() -> Iterator[None]:
     """Some plugins (qpOASES) print a banner from C at set-up; keep the user's terminal clean."""
     try:
         fd = sys.stdout.fileno()
@@ -61,7 +61,7 @@ def _stdout_silenced() -> Iterator[None]:
 def plugin_available(plugin: str) -> bool:
     """True if casadi on this machine can load ``plugin`` (checked once)."""
     try:
-        with _stdout_silenced():
+        with stdout_silenced():
             ca.conic("probe", plugin, {"h": ca.Sparsity.dense(1, 1), "a": ca.Sparsity.dense(1, 1)}, PLUGINS[plugin][0])
     except RuntimeError:
         return False
@@ -81,7 +81,7 @@ class CasadiConic(QPBackend):
 
     @functools.lru_cache(maxsize=None)  # noqa: B019 - backends are few, long-lived singletons
     def _conic(self, m: int, k: int) -> ca.Function:
-        with _stdout_silenced():
+        with stdout_silenced():
             return ca.conic(
                 f"gauss_qp_{self.plugin}", self.plugin, {"h": ca.Sparsity.dense(m, m), "a": ca.Sparsity.dense(k, m)}, self.options
             )
@@ -94,7 +94,7 @@ class CasadiConic(QPBackend):
     def solve(self, H: np.ndarray, S: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m, k = H.shape[0], S.shape[0]
         solver = self._conic(m, k)
-        with _stdout_silenced():
+        with stdout_silenced():
             sol = solver(h=H, g=np.zeros(m), a=S, lba=rhs, uba=rhs)
         u = np.array(sol["x"]).ravel()
         if not solver.stats().get("success", True) or not np.all(np.isfinite(u)):
