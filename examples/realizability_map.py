@@ -34,9 +34,15 @@ ax.contour(np.degrees(LON), np.degrees(LAT), N @ l, [0.0], colors="white", lines
 ax.plot([], [], "r-", label="true zero set (I⁻¹n, l) = 0")
 ax.plot([], [], "w--", label="naive n ⊥ l")
 ax.legend(loc="lower left", facecolor="0.3", labelcolor="white")
-ax.set(xlabel="longitude of n [°]", ylabel="latitude of n [°]", title="Servo torque along n keeping (ω, l) = 0, l = (1,1,1)/√3, I = diag(1,2,3)")
+ax.set(
+    xlabel="longitude of n [°]",
+    ylabel="latitude of n [°]",
+    title="Servo torque along n keeping (ω, l) = 0, l = (1,1,1)/√3, I = diag(1,2,3)",
+)
 out = sys.argv[1] if len(sys.argv) > 1 else "realizability_map.png"
 fig.savefig(out, dpi=110, bbox_inches="tight")
 off = np.abs(N @ l) < 0.01
-print(f"directions with n ⊥ l: margin between {margin[off].min():.3f} and {margin[off].max():.3f} — most are realizable")
+print(
+    f"directions with n ⊥ l: margin between {margin[off].min():.3f} and {margin[off].max():.3f} — most are realizable"
+)
 print(f"smallest margin on the grid: {margin.min():.2e} (near the red circle n ⊥ I⁻¹l); figure written to {out}")

@@ -14,6 +14,11 @@ for realization in ("ideal", "servo"):
     scene = gp.scenes.get("two-masses", m1=m1, m2=m2, F=F, realization=realization)
     direct = scene.model.step(0.0, scene.q0, scene.v0, solver="direct")
     gauss = scene.model.step(0.0, scene.q0, scene.v0, solver="qp")
-    print(f"{realization:6s}: accelerations {gauss.a}, reaction {gauss.reaction}, compulsion Z = {gauss.compulsion:.4f}")
+    print(
+        f"{realization:6s}: accelerations {gauss.a}, reaction {gauss.reaction}, compulsion Z = {gauss.compulsion:.4f}"
+    )
     print(f"        QP vs direct: {gauss.disagreement(direct):.1e}; realizability margin {gauss.margin:.3f}")
-print(f"\nclosed forms: rod F/(m1+m2) = {F / (m1 + m2):.4f}; servo F/m2 = {F / m2:.4f}, servo force m1·F/m2 = {m1 * F / m2:.4f}")
+print(
+    f"\nclosed forms: rod F/(m1+m2) = {F / (m1 + m2):.4f}; "
+    f"servo F/m2 = {F / m2:.4f}, servo force m1·F/m2 = {m1 * F / m2:.4f}"
+)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
@@ -34,6 +35,16 @@ class Group(NamedTuple):
     label: str = ""
 
 
+@dataclass(frozen=True)
+class Where:
+    """Where a step happens, for messages: its time, solver, constraints and (lazily) its data."""
+
+    t: float
+    solver: str
+    groups: list[Group]
+    data: Callable[[], StepProblem]
+
+
 def _where(t: float) -> str:
     return f"at t={t:.6g}"
 
@@ -46,7 +57,9 @@ def _check_data(data: StepProblem, t: float, groups: list[Group]) -> None:
     for g in groups:
         for field, what in (("J", "∂Φ/∂v"), ("phi", "φ = −(∂Φ/∂q q̇ + ∂Φ/∂t)"), ("Phi", "Φ")):
             if not np.all(np.isfinite(getattr(data, field)[g.rows])):
-                raise NonFiniteError(f"constraint {g.name!r}: {what} is not finite {_where(t)}; check its formula there")
+                raise NonFiniteError(
+                    f"constraint {g.name!r}: {what} is not finite {_where(t)}; check its formula there"
+                )
         if not np.all(np.isfinite(data.D[:, g.cols])):
             raise NonFiniteError(f"constraint {g.name!r}: the reaction directions D are not finite {_where(t)}")
 
@@ -66,7 +79,9 @@ def _not_positive_definite(data: StepProblem, t: float) -> NotPositiveDefiniteEr
     )
 
 
-def _unrealizable(data: StepProblem, t: float, margin: float, groups: list[Group], margin_error: float) -> RealizabilityError:
+def _unrealizable(
+    data: StepProblem, t: float, margin: float, groups: list[Group], margin_error: float
+) -> RealizabilityError:
     solo = [(float(np.min(cosines(data.A, data.J[g.rows], data.D[:, g.cols]), initial=0.0)), g) for g in groups]
     worst_margin, worst = min(solo, key=lambda s: s[0])
     if worst_margin < margin_error or len(groups) == 1:
@@ -88,9 +103,10 @@ def _unrealizable(data: StepProblem, t: float, margin: float, groups: list[Group
     )
 
 
-def evaluation_failed(exc: RuntimeError, *, t: float, solver: str, groups: list[Group], data: Callable[[], StepProblem], margin_error: float) -> Exception:
+def evaluation_failed(exc: RuntimeError, where: Where, *, margin_error: float) -> Exception:
     """The compiled step raised (a QP plugin refuses NaN data, say): find the cause in the data."""
-    d = data()
+    t, solver, groups = where.t, where.solver, where.groups
+    d = where.data()
     _check_data(d, t, groups)
     if not np.all(np.linalg.eigvalsh(0.5 * (d.A + d.A.T)) > 0) or not np.allclose(d.A, d.A.T, rtol=1e-12, atol=0):
         return _not_positive_definite(d, t)
@@ -100,17 +116,9 @@ def evaluation_failed(exc: RuntimeError, *, t: float, solver: str, groups: list[
     return QPSolveError(f"the step failed {_where(t)} in {solver}: {str(exc).strip().splitlines()[-1]}")
 
 
-def to_result(
-    out: dict[str, np.ndarray],
-    *,
-    t: float,
-    solver: str,
-    groups: list[Group],
-    data: Callable[[], StepProblem],
-    margin_warn: float,
-    margin_error: float,
-) -> StepResult:
+def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, margin_error: float) -> StepResult:
     """Check a kernel's outputs and package them; raise a project error on failure."""
+    t, solver, groups, data = where.t, where.solver, where.groups, where.data
     pivot = float(out["pivot"][0])
     finite = bool(np.isfinite(out["checksum"][0]))
     if not (pivot > 0) or not finite:
@@ -130,7 +138,9 @@ def to_result(
     if margin < margin_error:
         raise _unrealizable(data(), t, margin, groups, margin_error)
     if not finite and not all(np.all(np.isfinite(v)) for name, v in out.items() if name not in ("S_hat", "checksum")):
-        raise NonFiniteError(f"the step produced NaN or inf {_where(t)} although its data are finite; margin {margin:.3g}")
+        raise NonFiniteError(
+            f"the step produced NaN or inf {_where(t)} although its data are finite; margin {margin:.3g}"
+        )
     if margin < margin_warn:
         names = ", ".join(repr(g.name) for g in groups)
         warnings.warn(

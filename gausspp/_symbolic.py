@@ -66,8 +66,7 @@ def require_affine_in(expr: ca.SX, v: ca.SX, what: str) -> None:
     """Raise :class:`NotAffineError` unless ``expr`` is affine in ``v``."""
     if ca.depends_on(ca.jacobian(expr, v), v):
         raise NotAffineError(
-            f"{what} must be affine in the velocities (its ∂/∂v depends on v); "
-            "write it as N_v(q, t) v + N_0(q, t)"
+            f"{what} must be affine in the velocities (its ∂/∂v depends on v); write it as N_v(q, t) v + N_0(q, t)"
         )
 
 

@@ -10,6 +10,7 @@ import argparse
 import sys
 import time
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -21,8 +22,8 @@ from .model import Model
 def _time_per_step(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, solver: str) -> float:
     """Minimum over repeats of the compiled kernel's time per step, in µs."""
     kernel = model.kernel(solver)
-    for buf, value in zip(kernel.inputs, (t, q, v, lam), strict=True):
-        buf[:] = np.ravel(value)
+    kernel.inputs[0][0] = t
+    kernel.inputs[1][:], kernel.inputs[2][:], kernel.inputs[3][:] = q, v, lam
     calls, best = 2000, np.inf
     for _ in range(5):
         start = time.perf_counter()
@@ -34,14 +35,17 @@ def _time_per_step(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np
 
 def demo(args: argparse.Namespace) -> int:
     """Two masses, rod vs servo, and the rigid-body servo: QP vs direct, table and timings."""
-    cases = [
+    cases: list[tuple[str, dict[str, Any]]] = [
         ("two-masses", {"realization": "ideal"}),
         ("two-masses", {"realization": "servo"}),
         ("rigid-body-servo", {}),
         ("rigid-body-servo", {"n": (1.0, 0.2, 0.0)}),
     ]
     print(f"gausspp demo — one step at t = 0 by the direct formula and by the Gauss QP ({qp.DEFAULT})\n")
-    header = f"{'scene':18s} {'realization':22s} {'solver':8s} {'acceleration':>30s} {'multiplier':>11s} {'QP vs direct':>12s} {'µs/step':>8s}"
+    header = (
+        f"{'scene':18s} {'realization':22s} {'solver':8s} {'acceleration':>30s} "
+        f"{'multiplier':>11s} {'QP vs direct':>12s} {'µs/step':>8s}"
+    )
     print(header)
     print("-" * len(header))
     for name, params in cases:
@@ -51,7 +55,9 @@ def demo(args: argparse.Namespace) -> int:
         direct = model.step(0.0, scene.q0, scene.v0, solver="direct")
         gauss = model.step(0.0, scene.q0, scene.v0, solver="qp")
         label = params.get("realization") or (
-            "Suslov (n = l)" if scene.params.get("suslov") else "servo n=(" + ", ".join(f"{x:.2f}" for x in scene.params["n"]) + ")"
+            "Suslov (n = l)"
+            if scene.params.get("suslov")
+            else "servo n=(" + ", ".join(f"{x:.2f}" for x in scene.params["n"]) + ")"
         )
         for res, solver in ((direct, "direct"), (gauss, "qp")):
             acc = np.array2string(res.a, precision=5, suppress_small=True, separator=", ")

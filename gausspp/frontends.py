@@ -214,9 +214,7 @@ class RigidBody(Mechanism):
         q, w, t = self.q, self.v, self.t
         self.rotation = quaternion_to_matrix(q)
         moment = (
-            evaluate(torque, (self.rotation, w, t), (3, 1), "torque(R, w, t)")
-            if torque is not None
-            else ca.SX.zeros(3)
+            evaluate(torque, (self.rotation, w, t), (3, 1), "torque(R, w, t)") if torque is not None else ca.SX.zeros(3)
         )
         Iw = ca.SX(ca.DM(I)) @ w
         self.A = ca.SX(ca.DM(I))

@@ -38,9 +38,9 @@ class _Bound:
         self.res = [np.zeros(fn.nnz_out(i)) for i in range(fn.n_out())]
         self._buf, self.eval = fn.buffer()
         for i, arr in enumerate(self.args):
-            self._buf.set_arg(i, memoryview(arr))
+            self._buf.set_arg(i, memoryview(arr))  # type: ignore[call-arg, arg-type]  # casadi's stubs
         for i, arr in enumerate(self.res):
-            self._buf.set_res(i, memoryview(arr))
+            self._buf.set_res(i, memoryview(arr))  # type: ignore[call-arg, arg-type]
         # matrix-shaped views of the output buffers, made once (casadi stores column-major)
         self.outputs = [
             r.reshape(fn.size_out(i), order="F") if fn.size_out(i)[1] > 1 else r for i, r in enumerate(self.res)
@@ -121,7 +121,9 @@ def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str
     """Compile the step ``p`` (expressions of ``inputs``) for ``solver`` ∈ {"direct", "qp"}."""
     red = reduce(p)
     if solver == "direct":
-        return CompiledKernel(ca.Function(f"{name}_direct", inputs, _dense(outputs(p, red, direct_reaction(red), None))))
+        return CompiledKernel(
+            ca.Function(f"{name}_direct", inputs, _dense(outputs(p, red, direct_reaction(red), None)))
+        )
     assert backend is not None
     k, m = red.S_hat.shape
     z, y = ca.SX.sym("z", m), ca.SX.sym("y", k)
@@ -132,7 +134,7 @@ def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str
     mx_in = [ca.MX.sym(f"in{i}", s.sparsity()) for i, s in enumerate(inputs)]
     H, S, rhs = build(*mx_in)
     z_mx, y_mx = backend.graph(H, S, rhs)
-    kernel = CompiledKernel(ca.Function(f"{name}_qp", mx_in, finish(*mx_in, z_mx, y_mx)))
+    kernel = CompiledKernel(ca.Function(f"{name}_qp", mx_in, list(finish(*mx_in, z_mx, y_mx))))
     with stdout_silenced():  # some plugins (qpOASES) print a banner on their first solve
         try:
             kernel.evaluate()

@@ -15,7 +15,7 @@ import casadi as ca
 import numpy as np
 
 from . import qp
-from ._outcome import Group, evaluation_failed, to_result
+from ._outcome import Group, Where, evaluation_failed, to_result
 from .constraints import Constraint
 from .errors import InputError, MissingMultiplierError, NonFiniteError, ShapeError, UnknownNameError
 from .frontends import Mechanism
@@ -62,9 +62,7 @@ class Model:
         margin_error: float = 1e-12,
     ) -> None:
         if not isinstance(mechanism, Mechanism):
-            raise InputError(
-                f"mechanism must be a Lagrangian, RigidBody or MassMatrix, got {type(mechanism).__name__}"
-            )
+            raise InputError(f"mechanism must be a Lagrangian, RigidBody or MassMatrix, got {type(mechanism).__name__}")
         if isinstance(constraints, Constraint):
             constraints = [constraints]
         constraints = list(constraints)
@@ -102,7 +100,9 @@ class Model:
             reaction = real.reaction(mech, e, lam_c)
             D = reaction.D
             if D.size1() != mech.nv:
-                raise ShapeError(f"constraint {name!r}: reaction directions D have shape {D.shape}, expected ({mech.nv}, m)")
+                raise ShapeError(
+                    f"constraint {name!r}: reaction directions D have shape {D.shape}, expected ({mech.nv}, m)"
+                )
             Ds.append(D)
             r0 = r0 + reaction.r0
             groups.append(Group(name, slice(row, row + k), slice(col, col + D.size2()), real.hint, real.label))
@@ -111,7 +111,8 @@ class Model:
         self.k, self.m = row, col
         self.row_names = row_names
         self._groups = groups
-        self._lam0 = None if any(p is None for p in lam0_parts) else np.concatenate(lam0_parts or [np.zeros(0)])
+        known = [p for p in lam0_parts if p is not None]
+        self._lam0: np.ndarray | None = None if len(known) < len(lam0_parts) else np.concatenate([np.zeros(0), *known])
         self._expressions = StepExpressions(
             A=mech.A,
             f=mech.f,
@@ -156,7 +157,9 @@ class Model:
             raise InputError(f"backend={backend!r} applies to solver='qp' only")
         chosen = qp.get(backend) if solver == "qp" else None
         key = (solver, chosen.name if chosen else None)
-        if key not in self._kernels or (chosen is not None and getattr(self._kernels[key], "backend", chosen) is not chosen):
+        if key not in self._kernels or (
+            chosen is not None and getattr(self._kernels[key], "backend", chosen) is not chosen
+        ):
             self._kernels[key] = build_kernel("step", self._inputs, self._expressions, solver, chosen)
         return self._kernels[key]
 
@@ -176,7 +179,11 @@ class Model:
             return t, q, v, np.zeros(0)
         if lam is None:
             if self._lam0 is None:
-                missing = [n for n, c in zip(self.names, self.constraints, strict=True) if c.realization.has_state and c.realization.lam0 is None]
+                missing = [
+                    n
+                    for n, c in zip(self.names, self.constraints, strict=True)
+                    if c.realization.has_state and c.realization.lam0 is None
+                ]
                 raise MissingMultiplierError(
                     f"constraint(s) {missing} carry λ as a state and need its value: pass lam=... "
                     "or give lam0 to their realization"
@@ -184,7 +191,9 @@ class Model:
             lam = self._lam0
         return t, q, v, _state_vector("lam", lam, self.n_lam, t)
 
-    def step(self, t: float, q: Any, v: Any, lam: Any = None, *, solver: str = "qp", backend: str | None = None) -> StepResult:
+    def step(
+        self, t: float, q: Any, v: Any, lam: Any = None, *, solver: str = "qp", backend: str | None = None
+    ) -> StepResult:
         """Solve the step at ``(t, q, v, λ)``: Gauss's principle as a QP, or the direct formula.
 
         Parameters
@@ -208,12 +217,12 @@ class Model:
         t, q, v, lam = self._state(t, q, v, lam)
         kernel = self.kernel(solver, backend)
         name = "direct" if solver == "direct" else qp.get(backend).name
-        where = dict(t=t, solver=name, groups=self._groups, data=lambda: self.step_data(t, q, v, lam))
+        where = Where(t, name, self._groups, lambda: self.step_data(t, q, v, lam))
         try:
             out = kernel(t, q, v, lam)
         except RuntimeError as exc:  # casadi refused to evaluate (e.g. a QP plugin given NaN data)
-            raise evaluation_failed(exc, margin_error=self.margin_error, **where) from None
-        return to_result(out, margin_warn=self.margin_warn, margin_error=self.margin_error, **where)
+            raise evaluation_failed(exc, where, margin_error=self.margin_error) from None
+        return to_result(out, where, margin_warn=self.margin_warn, margin_error=self.margin_error)
 
     def step_data(self, t: float, q: Any, v: Any, lam: Any = None) -> StepProblem:
         """The step's ``A, f = F − h, r₀, J, φ, D, Φ`` as numbers (no checks on their values)."""

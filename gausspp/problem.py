@@ -15,7 +15,7 @@ import casadi as ca
 import numpy as np
 
 from . import qp
-from ._outcome import Group, evaluation_failed, to_result
+from ._outcome import Group, Where, evaluation_failed, to_result
 from .errors import InputError, NonFiniteError, ShapeError
 from .kernel import Kernel, build_kernel
 from .results import StepResult
@@ -123,9 +123,9 @@ def solve(
     kernel = _kernel(n, k, m, solver, name)
     p = problem
     groups = [Group(f"row {i}", slice(i, i + 1), slice(i, i + 1) if m == k else slice(0, m), "") for i in range(k)]
-    where = dict(t=0.0, solver=name or "direct", groups=groups, data=lambda: problem)
+    where = Where(0.0, name or "direct", groups, lambda: problem)
     try:
         out = kernel(p.A, p.f, p.r0, p.J, p.phi, p.D)
     except RuntimeError as exc:
-        raise evaluation_failed(exc, margin_error=margin_error, **where) from None
-    return to_result(out, margin_warn=margin_warn, margin_error=margin_error, **where)
+        raise evaluation_failed(exc, where, margin_error=margin_error) from None
+    return to_result(out, where, margin_warn=margin_warn, margin_error=margin_error)

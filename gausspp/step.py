@@ -94,7 +94,20 @@ def reduce(p: StepExpressions) -> Reduced:
 
 
 #: Names of a step kernel's outputs, in order.
-OUTPUTS = ("a", "u", "reaction", "compulsion", "S_hat", "residual", "Phi", "pivot", "a_free", "qp_primal", "qp_dual", "checksum")
+OUTPUTS = (
+    "a",
+    "u",
+    "reaction",
+    "compulsion",
+    "S_hat",
+    "residual",
+    "Phi",
+    "pivot",
+    "a_free",
+    "qp_primal",
+    "qp_dual",
+    "checksum",
+)
 
 
 def outputs(p: StepExpressions, red: Reduced, z: ca.SX, y: ca.SX | None) -> list[ca.SX]:
@@ -106,7 +119,9 @@ def outputs(p: StepExpressions, red: Reduced, z: ca.SX, y: ca.SX | None) -> list
     else:  # relative residuals: scale-free, so one threshold fits every model
         tiny = 1e-300
         size_S, size_z = ca.mmax(ca.fabs(red.S_hat)), ca.mmax(ca.fabs(z))
-        primal = ca.mmax(ca.fabs(red.S_hat @ z - red.rhs_hat)) / (ca.mmax(ca.fabs(red.rhs_hat)) + size_S * size_z + tiny)
+        primal = ca.mmax(ca.fabs(red.S_hat @ z - red.rhs_hat)) / (
+            ca.mmax(ca.fabs(red.rhs_hat)) + size_S * size_z + tiny
+        )
         dual = ca.mmax(ca.fabs(z + red.S_hat.T @ y)) / (size_z + size_S * ca.mmax(ca.fabs(y)) + tiny)
     values = [
         a,
@@ -122,4 +137,7 @@ def outputs(p: StepExpressions, red: Reduced, z: ca.SX, y: ca.SX | None) -> list
         dual,
     ]
     # non-finite iff some output entry is (NaN and ±inf survive a sum): one number to check per step
-    return [*values, sum(ca.sum1(ca.vec(v)) for v in values)]
+    checksum = ca.SX(0)
+    for v in values:
+        checksum += ca.sum1(ca.vec(v))
+    return [*values, checksum]

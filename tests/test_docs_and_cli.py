@@ -27,7 +27,10 @@ def test_readme_example_runs(capsys: pytest.CaptureFixture[str]) -> None:
 def test_example_runs(script: str, tmp_path: Path) -> None:
     result = subprocess.run(
         [sys.executable, str(ROOT / "examples" / script), str(tmp_path / "figure.png")],
-        capture_output=True, text=True, timeout=60, cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=tmp_path,
     )
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip()

@@ -78,7 +78,9 @@ def test_unrealizable_constraint_names_time_constraint_and_fix() -> None:
 
 
 def test_unknown_backend_lists_valid_names() -> None:
-    with pytest.raises(gp.UnknownNameError, match=r"QP backend 'gurobix' is unknown; valid names here: \[.*casadi:osqp"):
+    with pytest.raises(
+        gp.UnknownNameError, match=r"QP backend 'gurobix' is unknown; valid names here: \[.*casadi:osqp"
+    ):
         masses().step(0.0, [0, 0], [0, 0], backend="gurobix")
     with pytest.raises(gp.UnknownNameError, match="solver='newton' is unknown"):
         masses().step(0.0, [0, 0], [0, 0], solver="newton")

@@ -13,7 +13,9 @@ L = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)
 
 
 def gyrostat(realization: gp.Realization) -> gp.Model:
-    return gp.Model(gp.RigidBody(inertia=I), gp.Constraint(lambda q, w, t: ca.dot(w, ca.DM(L)), name="l", realization=realization))
+    return gp.Model(
+        gp.RigidBody(inertia=I), gp.Constraint(lambda q, w, t: ca.dot(w, ca.DM(L)), name="l", realization=realization)
+    )
 
 
 def on_constraint(w: np.ndarray) -> np.ndarray:
@@ -87,7 +89,9 @@ def test_state_only_where_needed() -> None:
 
 
 def test_several_constraints_stack_rows_and_columns() -> None:
-    body = gp.Lagrangian(n=3, T=lambda q, v, t: 0.5 * (v[0] ** 2 + 2 * v[1] ** 2 + 3 * v[2] ** 2), F=lambda q, v, t: [1, 0, 0])
+    body = gp.Lagrangian(
+        n=3, T=lambda q, v, t: 0.5 * (v[0] ** 2 + 2 * v[1] ** 2 + 3 * v[2] ** 2), F=lambda q, v, t: [1, 0, 0]
+    )
     rod = gp.Constraint(lambda q, v, t: v[1] - v[0], name="rod")
     servo = gp.Constraint(lambda q, v, t: v[2] - v[1], name="servo", realization=gp.Force(M=lambda q, v, t: [0, 0, 1]))
     model = gp.Model(body, [rod, servo])

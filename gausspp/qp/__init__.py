@@ -33,7 +33,7 @@ def names() -> list[str]:
     return compiled + [f"qpsolvers:{s}" for s in qpsolvers_route.available()]
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _make(name: str) -> QPBackend:
     route, _, solver = name.partition(":")
     if route == "casadi" and solver in PLUGINS:

@@ -57,7 +57,7 @@ def stdout_silenced() -> Iterator[None]:
             os.close(saved)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def plugin_available(plugin: str) -> bool:
     """True if casadi on this machine can load ``plugin`` (checked once)."""
     try:
@@ -79,11 +79,14 @@ class CasadiConic(QPBackend):
         self.options = {"error_on_fail": False, **PLUGINS[plugin][0]}
         self.description = PLUGINS[plugin][1]
 
-    @functools.lru_cache(maxsize=None)  # noqa: B019 - backends are few, long-lived singletons
+    @functools.cache  # noqa: B019 - backends are few, long-lived singletons
     def _conic(self, m: int, k: int) -> ca.Function:
         with stdout_silenced():
             return ca.conic(
-                f"gauss_qp_{self.plugin}", self.plugin, {"h": ca.Sparsity.dense(m, m), "a": ca.Sparsity.dense(k, m)}, self.options
+                f"gauss_qp_{self.plugin}",
+                self.plugin,
+                {"h": ca.Sparsity.dense(m, m), "a": ca.Sparsity.dense(k, m)},
+                self.options,
             )
 
     def graph(self, H: ca.MX, S: ca.MX, rhs: ca.MX) -> tuple[ca.MX, ca.MX]:

@@ -48,6 +48,8 @@ class QpsolversBackend(QPBackend):
         except Exception as exc:  # the backend's own error, re-raised as ours (no abstraction leak)
             raise QPSolveError(f"{self.name} failed on the step QP: {exc}; try backend='casadi:qrqp'") from exc
         if not sol.found or sol.x is None or not np.all(np.isfinite(sol.x)):
-            raise QPSolveError(f"{self.name} found no solution of the step QP; try backend='casadi:qrqp' or solver='direct'")
+            raise QPSolveError(
+                f"{self.name} found no solution of the step QP; try backend='casadi:qrqp' or solver='direct'"
+            )
         y = sol.y if sol.y is not None else np.full(S.shape[0], np.nan)
         return np.asarray(sol.x, float), np.asarray(y, float)

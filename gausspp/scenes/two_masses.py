@@ -23,7 +23,9 @@ from ._scene import Scene
 REALIZATIONS = ("ideal", "servo")
 
 
-def build(m1: float = 1.0, m2: float = 3.0, F: float = 2.0, realization: str = "ideal", v: float = 0.0, t_end: float = 1.0) -> Scene:
+def build(
+    m1: float = 1.0, m2: float = 3.0, F: float = 2.0, realization: str = "ideal", v: float = 0.0, t_end: float = 1.0
+) -> Scene:
     """Two masses joined by a rod (ideal) or kept together by a follower force on ``m1`` (servo)."""
     if realization not in REALIZATIONS:
         raise UnknownNameError(f"two-masses: realization={realization!r} is unknown; use one of {list(REALIZATIONS)}")
