@@ -8,10 +8,12 @@ compulsion as a QP and is cross-checked against the direct multiplier solution.
 
 from __future__ import annotations
 
-from . import qp, realizability, scenes
+from . import methods, qp, realizability, scenes
 from .constraints import Constraint, Holonomic
+from .drift import Baumgarte
 from .errors import (
     GaussppError,
+    InitialDataError,
     InputError,
     MissingMultiplierError,
     NonFiniteError,
@@ -28,15 +30,19 @@ from .model import Model
 from .problem import StepProblem, solve
 from .realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
 from .results import StepResult
+from .simulate import simulate
+from .trajectory import Trajectory
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "Baumgarte",
     "Constraint",
     "Force",
     "GaussppError",
     "Holonomic",
     "Ideal",
+    "InitialDataError",
     "Inertial",
     "InputError",
     "Lagrangian",
@@ -56,10 +62,13 @@ __all__ = [
     "ShapeError",
     "StepProblem",
     "StepResult",
+    "Trajectory",
     "UnknownNameError",
     "Vakonomic",
+    "methods",
     "qp",
     "realizability",
     "scenes",
+    "simulate",
     "solve",
 ]

@@ -37,6 +37,10 @@ class MissingMultiplierError(InputError):
     """A realization with λ as state (inertial, vakonomic, mixed) lacks ``lam0``."""
 
 
+class InitialDataError(InputError):
+    """Initial data do not satisfy the constraints."""
+
+
 class UnknownNameError(InputError):
     """An unknown backend, scene, method or realization name was requested."""
 

@@ -38,8 +38,11 @@ class Mechanism(ABC):
     3. ``f`` — ``(nv,)`` generalized force minus velocity terms, ``F − h``;
     4. ``qdot`` — ``(nq,)`` kinematics ``q̇ = K(q, v, t)``;
     5. ``energy`` — total energy expression, or ``None`` if not known;
+    6. ``F_nc`` — ``(nv,)`` non-conservative applied forces (their power ``v·F_nc`` closes the
+       energy balance ``dE/dt = v·(F_nc + R)``), or ``None`` if not known;
 
     and implement :meth:`lagrange_rows`, the Lagrange derivative of an affine function.
+    Override :meth:`normalize` where ``q`` lives on a manifold (unit quaternions).
     """
 
     q: ca.SX
@@ -49,7 +52,16 @@ class Mechanism(ABC):
     f: ca.SX
     qdot: ca.SX
     energy: ca.SX | None
+    F_nc: ca.SX | None = None
     symmetric_by_construction: bool = True
+
+    def normalize(self, q: ca.SX) -> ca.SX:
+        """Bring ``q`` back onto the configuration manifold (identity for coordinates in Rⁿ)."""
+        return q
+
+    def normalize_array(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`normalize` on numbers."""
+        return q
 
     @property
     def nq(self) -> int:
@@ -136,6 +148,7 @@ class Lagrangian(Mechanism):
         self.f = force - ca.gradient(potential, q) - h
         self.qdot = v
         self.energy = kinetic + potential
+        self.F_nc = force
 
     def lagrange_rows(self, N: ca.SX) -> ca.SX:
         return _coordinate_lagrange_rows(N, self.q, self.v, self.t, self.qdot)
@@ -157,20 +170,41 @@ class MassMatrix(Mechanism):
         Right-hand side.
     energy : callable ``(q, v, t) -> scalar``, optional
         Total energy, recorded along trajectories when given.
+    kinematics : callable ``(q, v, t) -> (nq,)``, optional
+        ``q̇`` when ``v`` are quasi-velocities (then give ``nq``); default ``q̇ = v``.
+    nq : int, optional
+        Number of configuration coordinates when ``kinematics`` is given.
     """
 
     symmetric_by_construction = False
 
-    def __init__(self, n: int, A: Expr, f: Expr, energy: Expr | None = None) -> None:
+    def __init__(
+        self,
+        n: int,
+        A: Expr,
+        f: Expr,
+        energy: Expr | None = None,
+        kinematics: Expr | None = None,
+        nq: int | None = None,
+    ) -> None:
         n = _check_n(n)
-        self._symbols(n, n)
+        nq = n if nq is None else _check_n(nq)
+        if kinematics is None and nq != n:
+            raise InputError(f"MassMatrix: nq={nq} differs from n={n}; give the kinematics q̇ = K(q, v, t)")
+        self._symbols(nq, n)
         q, v, t = self.q, self.v, self.t
         self.A = evaluate(A, (q, t), (n, n), "A(q, t)")
         self.f = evaluate(f, (q, v, t), (n, 1), "f(q, v, t)")
-        self.qdot = v
+        self.qdot = v if kinematics is None else evaluate(kinematics, (q, v, t), (nq, 1), "kinematics(q, v, t)")
+        self._coordinates = kinematics is None
         self.energy = evaluate(energy, (q, v, t), (1, 1), "energy(q, v, t)") if energy is not None else None
 
     def lagrange_rows(self, N: ca.SX) -> ca.SX:
+        if not self._coordinates:
+            raise InputError(
+                "MassMatrix with quasi-velocities: the Lagrange derivative [N] needs generalized coordinates "
+                "(q̇ = v); use Lagrangian or RigidBody for inertial and mixed realizations"
+            )
         return _coordinate_lagrange_rows(N, self.q, self.v, self.t, self.qdot)
 
 
@@ -189,7 +223,9 @@ class RigidBody(Mechanism):
 
     Configuration: a unit quaternion ``q = (w, x, y, z)`` (body → space); velocity: ``ω`` in body
     axes. ``T = ½ ωᵀ I ω`` and the Euler–Poincaré operator ``[f] = d/dt ∂f/∂ω + ω × ∂f/∂ω`` give
-    Euler's equations ``I ω̇ + ω × I ω = M``, so ``A = I`` and ``f = M − ω × I ω``.
+    Euler's equations ``I ω̇ + ω × I ω = M``, so ``A = I`` and ``f = M − ω × I ω``. The torque is
+    counted as non-conservative: the energy recorded is ``½ ωᵀIω`` and the torque's power
+    ``ω·M`` enters the work.
     Kinematics ``q̇ = ½ q ⊗ (0, ω)``.
 
     Parameters
@@ -226,7 +262,16 @@ class RigidBody(Mechanism):
             pw * w[1] + pz * w[0] - px * w[2],
             pw * w[2] + px * w[1] - py * w[0],
         )
-        self.energy = 0.5 * ca.dot(w, Iw) if torque is None else None
+        self.energy = 0.5 * ca.dot(w, Iw)
+        self.F_nc = moment
+
+    def normalize(self, q: ca.SX) -> ca.SX:
+        """Unit quaternion: ``q / |q|``."""
+        return q / ca.norm_2(q)
+
+    def normalize_array(self, q: np.ndarray) -> np.ndarray:
+        """Unit quaternion: ``q / |q|``."""
+        return q / np.linalg.norm(q)
 
     def lagrange_rows(self, N: ca.SX) -> ca.SX:
         """Euler–Poincaré derivative ``[N_i] = d/dt ∂N_i/∂ω + ω × ∂N_i/∂ω``.

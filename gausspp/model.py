@@ -25,6 +25,7 @@ from .results import StepResult
 from .step import StepExpressions
 
 SOLVERS = ("qp", "direct")
+_NO_STAB = np.zeros(2)
 
 
 class Model:
@@ -82,6 +83,7 @@ class Model:
         self._assemble()
         self._kernels: dict[tuple[str, str | None], Kernel] = {}
         self._data_fn: ca.Function | None = None
+        self._projection: ca.Function | None = None
 
     def _assemble(self) -> None:
         mech = self.mechanism
@@ -89,7 +91,7 @@ class Model:
         sizes = [int(e.Phi.numel()) for e in exprs]
         self.n_lam = sum(k for k, c in zip(sizes, self.constraints, strict=True) if c.realization.has_state)
         self.lam = ca.SX.sym("lam", self.n_lam)
-        Ds, r0, groups, lam0_parts, row_names = [], ca.SX.zeros(mech.nv), [], [], []
+        Ds, r0, groups, lam0_parts, row_names, lam_cols = [], ca.SX.zeros(mech.nv), [], [], [], []
         row = col = lam_at = 0
         for c, e, k, name in zip(self.constraints, exprs, sizes, self.names, strict=True):
             real = c.realization
@@ -97,6 +99,7 @@ class Model:
             if real.has_state:
                 lam_at += k
                 lam0_parts.append(self._lam0_of(real.lam0, k, name))
+                lam_cols += list(range(col, col + k))  # u = λ̇ for these
             reaction = real.reaction(mech, e, lam_c)
             D = reaction.D
             if D.size1() != mech.nv:
@@ -110,19 +113,37 @@ class Model:
             row, col = row + k, col + D.size2()
         self.k, self.m = row, col
         self.row_names = row_names
+        self.lam_columns = lam_cols
         self._groups = groups
         known = [p for p in lam0_parts if p is not None]
         self._lam0: np.ndarray | None = None if len(known) < len(lam0_parts) else np.concatenate([np.zeros(0), *known])
+        Phi = ca.vertcat(*[e.Phi for e in exprs])
+        g = ca.vertcat(*[e.g if e.g is not None else ca.SX.zeros(k) for e, k in zip(exprs, sizes, strict=True)])
+        self.holonomic_rows = [
+            i
+            for e, k, at in zip(exprs, sizes, np.cumsum([0, *sizes]), strict=False)
+            if e.g is not None
+            for i in range(at, at + k)
+        ]
+        # Baumgarte terms (DESIGN §5): J q̈ = φ − α Φ − β g, with (α, β) an input (zero: the exact step)
+        self.stab = ca.SX.sym("stab", 2)
         self._expressions = StepExpressions(
             A=mech.A,
             f=mech.f,
             r0=r0,
             J=ca.vertcat(*[e.J for e in exprs]),
-            phi=ca.vertcat(*[e.phi for e in exprs]),
+            phi=ca.vertcat(*[e.phi for e in exprs]) - self.stab[0] * Phi - self.stab[1] * g,
             D=ca.horzcat(*Ds),
-            Phi=ca.vertcat(*[e.Phi for e in exprs]),
+            Phi=Phi,
+            v=mech.v,
+            qdot=mech.qdot,
+            energy=mech.energy,
+            F_nc=mech.F_nc,
+            g=g,
         )
-        self._inputs = [mech.t, mech.q, mech.v, self.lam]
+        self.has_energy = mech.energy is not None
+        self.has_force_power = mech.F_nc is not None
+        self._inputs = [mech.t, mech.q, mech.v, self.lam, self.stab]
 
     @staticmethod
     def _lam0_of(lam0: np.ndarray | None, k: int, name: str) -> np.ndarray | None:
@@ -148,8 +169,9 @@ class Model:
     def kernel(self, solver: str = "qp", backend: str | None = None) -> Kernel:
         """The compiled step for ``solver`` (and QP ``backend``), built on first use and kept.
 
-        Its inputs are ``(t, q, v, lam)``; write them into ``kernel.inputs`` and call
-        ``kernel.evaluate()`` for the fastest possible step, or call ``kernel(t, q, v, lam)``.
+        Its inputs are ``(t, q, v, lam, stab)`` (``stab`` = Baumgarte ``(α, β)``, zero for the exact
+        step); write them into ``kernel.inputs`` and call ``kernel.evaluate()`` for the fastest
+        possible step, or call ``kernel(t, q, v, lam, stab)``.
         """
         if solver not in SOLVERS:
             raise UnknownNameError(f"solver={solver!r} is unknown; use one of {list(SOLVERS)}")
@@ -219,7 +241,7 @@ class Model:
         name = "direct" if solver == "direct" else qp.get(backend).name
         where = Where(t, name, self._groups, lambda: self.step_data(t, q, v, lam))
         try:
-            out = kernel(t, q, v, lam)
+            out = kernel(t, q, v, lam, _NO_STAB)
         except RuntimeError as exc:  # casadi refused to evaluate (e.g. a QP plugin given NaN data)
             raise evaluation_failed(exc, where, margin_error=self.margin_error) from None
         return to_result(out, where, margin_warn=self.margin_warn, margin_error=self.margin_error)
@@ -230,7 +252,7 @@ class Model:
         if self._data_fn is None:
             p = self._expressions
             self._data_fn = ca.Function("step_data", self._inputs, [p.A, p.f, p.r0, p.J, p.phi, p.D, p.Phi])
-        A, f, r0, J, phi, D, Phi = (np.array(x) for x in self._data_fn(t, q, v, lam))
+        A, f, r0, J, phi, D, Phi = (np.array(x) for x in self._data_fn(t, q, v, lam, _NO_STAB))
         return StepProblem(A=A, f=f.ravel(), r0=r0.ravel(), J=J, phi=phi.ravel(), D=D, Phi=Phi.ravel())
 
     def __repr__(self) -> str:

@@ -39,6 +39,14 @@ class StepExpressions:
     phi : (k,)   right-hand side of ``J q̈ = φ``
     D : (n, m)   reaction directions
     Phi : (k,)   the constraint's value at the state (zero on the constraint)
+
+    and, for trajectories (defaults: absent):
+
+    v : (n,)     velocities, for the reaction's power ``v·R``
+    qdot : (nq,) kinematics ``q̇ = K(q, v, t)``
+    energy :     total energy ``T + V`` (0 when unknown)
+    F_nc : (n,)  non-conservative applied forces, for their power ``v·F`` (zeros when unknown)
+    g : (k,)     holonomic residuals ``g(q, t)`` (0 on velocity-level rows)
     """
 
     A: ca.SX
@@ -48,6 +56,11 @@ class StepExpressions:
     phi: ca.SX
     D: ca.SX
     Phi: ca.SX
+    v: ca.SX | None = None
+    qdot: ca.SX | None = None
+    energy: ca.SX | None = None
+    F_nc: ca.SX | None = None
+    g: ca.SX | None = None
 
 
 @dataclass(frozen=True)
@@ -106,6 +119,11 @@ OUTPUTS = (
     "a_free",
     "qp_primal",
     "qp_dual",
+    "qdot",
+    "energy",
+    "power_reaction",
+    "power_forces",
+    "g",
     "checksum",
 )
 
@@ -123,10 +141,12 @@ def outputs(p: StepExpressions, red: Reduced, z: ca.SX, y: ca.SX | None) -> list
             ca.mmax(ca.fabs(red.rhs_hat)) + size_S * size_z + tiny
         )
         dual = ca.mmax(ca.fabs(z + red.S_hat.T @ y)) / (size_z + size_S * ca.mmax(ca.fabs(y)) + tiny)
+    R = p.r0 + p.D @ u
+    vel = p.v if p.v is not None else ca.SX.zeros(R.numel())
     values = [
         a,
         u,
-        p.r0 + p.D @ u,
+        R,
         ca.sumsqr(z),
         red.S_hat,
         p.J @ a - p.phi,
@@ -136,8 +156,15 @@ def outputs(p: StepExpressions, red: Reduced, z: ca.SX, y: ca.SX | None) -> list
         primal,
         dual,
     ]
+    values += [
+        p.qdot if p.qdot is not None else ca.SX(0, 1),
+        p.energy if p.energy is not None else ca.SX(0),
+        ca.dot(vel, R),
+        ca.dot(vel, p.F_nc) if p.F_nc is not None else ca.SX(0),
+        p.g if p.g is not None else ca.SX.zeros(p.Phi.numel()),
+    ]
     # non-finite iff some output entry is (NaN and ±inf survive a sum): one number to check per step
     checksum = ca.SX(0)
-    for v in values:
-        checksum += ca.sum1(ca.vec(v))
+    for value in values:
+        checksum += ca.sum1(ca.vec(value))
     return [*values, checksum]

@@ -1,0 +1,58 @@
+"""The right-hand side ``y' = F(t, y)`` of a simulation, ``y = (q, v, λ, W_R, W_F)``.
+
+One compiled step call per evaluation (a buffer-bound kernel); cheap checks on the hot path,
+the full diagnosis of :mod:`gausspp._outcome` only when something is wrong.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import qp
+from ._outcome import QP_TOLERANCE, Where, to_result
+from .drift import Stabilization
+from .model import Model
+
+
+class RightHandSide:
+    """``F(t, y)`` for a model, a step solver and a stabilization; counts its evaluations."""
+
+    def __init__(self, model: Model, solver: str, backend: str | None, stab: Stabilization) -> None:
+        self.model = model
+        self.kernel = model.kernel(solver, backend)
+        self.solver = "direct" if solver == "direct" else qp.get(backend).name
+        self.stab = np.array(stab.stab, float)
+        self.evaluations = 0
+        m = model
+        self._slices = (slice(0, m.nq), slice(m.nq, m.nq + m.nv), slice(m.nq + m.nv, m.nq + m.nv + m.n_lam))
+        self._lam_cols = np.array(model.lam_columns, dtype=int)
+        self._scalar_margin = model.k == 1
+
+    def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
+        """Evaluate the step at ``(t, y)``; raise a project error if it fails."""
+        sq, sv, sl = self._slices
+        inputs = self.kernel.inputs
+        inputs[0][0] = t
+        inputs[1][:], inputs[2][:], inputs[3][:] = y[sq], y[sv], y[sl]
+        inputs[4][:] = self.stab if stabilized else 0.0
+        self.kernel.evaluate()
+        out = self.kernel.result()
+        self.evaluations += 1
+        ok = out["pivot"][0] > 0 and np.isfinite(out["checksum"][0]) and out["qp_primal"][0] <= QP_TOLERANCE
+        if ok and self._scalar_margin:
+            ok = abs(out["S_hat"].flat[0]) >= self.model.margin_error
+        if not ok:  # diagnose: raises the project error that explains the failure
+            m = self.model
+            q, v, lam = y[sq].copy(), y[sv].copy(), y[sl].copy()
+            where = Where(float(t), self.solver, m._groups, lambda: m.step_data(t, q, v, lam))
+            to_result(dict(out), where, margin_warn=0.0, margin_error=m.margin_error)
+        return out
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        out = self.evaluate(t, y)
+        u = out["u"]
+        return np.concatenate([out["qdot"], out["a"], u[self._lam_cols], out["power_reaction"], out["power_forces"]])
+
+    def qdot(self, t: float, y: np.ndarray) -> np.ndarray:
+        """The kinematics ``q̇ = K(q, v, t)`` at ``y`` (one step evaluation)."""
+        return np.array(self.evaluate(t, y)["qdot"])

@@ -1,0 +1,364 @@
+"""``simulate``: integrate a model from initial data (DESIGN §5).
+
+What is integrated (the model's step as ``y' = F(t, y)`` with ``y = (q, v, λ, W_R, W_F)``),
+how (a :mod:`~gausspp.methods` method) and what is recorded (a :class:`~gausspp.Trajectory`
+built from the accepted states afterwards) are kept apart. A run that fails midway keeps
+what it computed: the exception carries ``.trajectory`` (``throw=True``, the default), or the
+trajectory is returned with ``status="failed"`` and the message (``throw=False``).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable
+from dataclasses import replace
+from typing import Any
+
+import numpy as np
+
+from . import methods as _methods
+from . import qp
+from ._outcome import QP_TOLERANCE, Where, to_result
+from ._rhs import RightHandSide
+from .drift import Baumgarte, Stabilization, as_stabilization, projection_function
+from .errors import GaussppError, InitialDataError, InputError, NonFiniteError, RealizabilityWarning
+from .model import Model
+from .trajectory import Trajectory
+
+
+def simulate(
+    model: Model,
+    q0: Any,
+    v0: Any,
+    t_end: float,
+    *,
+    t0: float = 0.0,
+    lam0: Any = None,
+    dt: float | None = None,
+    method: str | _methods.Method = "rk4",
+    solver: str = "qp",
+    backend: str | None = None,
+    stabilize: str | Baumgarte | list[Any] | None = None,
+    rtol: float = 1e-9,
+    atol: float = 1e-12,
+    record: int | Any = 1,
+    constraint_tol: float = 1e-8,
+    throw: bool = True,
+) -> Trajectory:
+    """Integrate ``model`` from ``(q0, v0)`` at ``t0`` to ``t_end``.
+
+    Parameters
+    ----------
+    model : Model
+    q0, v0 : arrays
+        Initial configuration and velocity; they must satisfy the constraints (to
+        ``constraint_tol``) unless ``stabilize`` includes ``"project"``, which projects them first.
+    t_end : float
+    lam0 : array, optional
+        Initial ``λ`` for realizations that carry it (default: their ``lam0``).
+    dt : float
+        Step for fixed-step methods (and, if given, the first and largest step of adaptive ones).
+    method : str
+        See :func:`gausspp.methods.names`: ``"rk4"``, ``"symplectic-euler"``, ``"RK45"``,
+        ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"rk4-compiled"``, ``"cvodes"``.
+    solver : {"qp", "direct"}
+        How each step is solved; ``backend`` picks the QP backend.
+    stabilize : None, "baumgarte", "project", Baumgarte, or a list of these
+        Drift control (off by default).
+    rtol, atol : float
+        Tolerances of adaptive methods.
+    record : int or array
+        Record every ``record``-th step (fixed-step methods; every accepted step for adaptive
+        ones), or at the given times (must lie on the grid for fixed-step methods).
+    throw : bool
+        Raise on failure (the exception's ``.trajectory`` holds what was computed), or return
+        the partial trajectory with ``status="failed"``.
+
+    Returns
+    -------
+    Trajectory
+    """
+    meth = _methods.get(method)
+    t0, t_end = float(t0), float(t_end)
+    if not (np.isfinite(t0) and np.isfinite(t_end) and t_end > t0):
+        raise InputError(f"need finite t0 < t_end, got t0={t0}, t_end={t_end}")
+    if not meth.adaptive:
+        if dt is None or not (dt > 0) or not np.isfinite(dt):
+            raise InputError(f"method {meth.name!r} has a fixed step: give dt > 0 (got dt={dt})")
+    elif dt is not None and not dt > 0:
+        raise InputError(f"dt must be positive, got {dt}")
+    if solver not in ("qp", "direct"):
+        raise InputError(f"solver={solver!r} is unknown; use 'qp' or 'direct'")
+    if solver == "direct" and backend is not None:
+        raise InputError(f"backend={backend!r} applies to solver='qp' only")
+    stab = as_stabilization(stabilize, dt)
+    q, v, lam = _initial_state(model, t0, q0, v0, lam0)
+    if stab.project:
+        q, v = _project(model)(t0, q, v, lam)
+    _check_on_constraint(model, t0, q, v, lam, constraint_tol)
+
+    rhs = RightHandSide(model, solver, backend, stab)
+    y0 = np.concatenate([q, v, lam, [0.0, 0.0]])
+    label = "direct" if solver == "direct" else qp.get(backend).name
+    failure: Exception | None = None
+    try:
+        if meth.lane == "python":
+            ts, ys, steps, failure = _fixed_step(meth, rhs, model, stab, t0, t_end, float(dt), y0, record)
+        elif meth.lane == "scipy":
+            ts, ys, steps, failure = _scipy(meth, rhs, t0, t_end, y0, dt, rtol, atol, record)
+        else:
+            from ._compiled import integrate_compiled
+
+            ts, ys, steps, failure = integrate_compiled(
+                meth, model, solver, backend, stab, t0, t_end, dt, y0, rtol, atol, record
+            )
+    except GaussppError as exc:  # failed before the first step could be kept
+        failure, ts, ys, steps = exc, np.array([t0]), y0[None, :], 0
+    evaluations = rhs.evaluations
+    traj, record_failure = _record(model, rhs, ts, ys, meth, label, steps, failure)
+    traj = replace(traj, rhs_evaluations=evaluations)
+    failure = failure or record_failure
+    if failure is None:
+        return traj
+    traj = _failed(traj, failure)
+    if throw:
+        failure.trajectory = traj  # type: ignore[attr-defined]
+        raise failure
+    return traj
+
+
+# -- set-up ----------------------------------------------------------------------------------
+def _initial_state(model: Model, t0: float, q0: Any, v0: Any, lam0: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    t, q, v, lam = model._state(t0, q0, v0, lam0)
+    return q, v, lam
+
+
+def _project(model: Model) -> Callable[[float, np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    if model._projection is None:
+        model._projection = projection_function(model)
+    fn = model._projection
+
+    def project(t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        q1, v1 = fn(t, q, v, lam)
+        return np.array(q1).ravel(), np.array(v1).ravel()
+
+    return project
+
+
+def _check_on_constraint(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, tol: float) -> None:
+    data = model.kernel("direct")(t, q, v, lam, np.zeros(2))
+    Phi, g = data["Phi"], data["g"]
+    for values, what in ((g, "g(q, t)"), (Phi, "Φ(q, v, t)")):
+        worst = int(np.argmax(np.abs(values))) if values.size else 0
+        if values.size and abs(values[worst]) > tol:
+            raise InitialDataError(
+                f"initial data are off the constraint {model.row_names[worst]!r} at t={t:.6g}: {what} = "
+                f"{values[worst]:.3g} (tolerance {tol:g}); correct q0/v0, or pass stabilize='project' to "
+                "project them onto the constraint along the realization's directions"
+            )
+
+
+# -- lanes -----------------------------------------------------------------------------------
+def _fixed_step(
+    meth: _methods.Method,
+    rhs: RightHandSide,
+    model: Model,
+    stab: Stabilization,
+    t0: float,
+    t_end: float,
+    dt: float,
+    y0: np.ndarray,
+    record: Any,
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None]:
+    n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
+    keep = _keep_indices(n_steps, t0, dt, record)
+    ts, ys = np.empty(keep.size), np.empty((keep.size, y0.size))
+    project = _project(model) if stab.project else None
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    y, slot, t = y0.copy(), 0, t0
+    failure = None
+    for i in range(n_steps + 1):
+        if slot < keep.size and keep[slot] == i:
+            ts[slot], ys[slot] = t, y
+            slot += 1
+        if i == n_steps:
+            break
+        h = min(dt, t_end - t)
+        try:
+            if meth.tableau is not None:
+                y = _methods.rk_step(meth.tableau, rhs, t, y, h)
+            else:  # symplectic Euler: v, λ and the works first, then q with the new v
+                y_new = y + h * rhs(t, y)
+                y_new[:nq] = y[:nq]
+                y_new[:nq] = y[:nq] + h * rhs.qdot(t, y_new)
+                y = y_new
+            t = t0 + (i + 1) * dt if i + 1 < n_steps else t_end
+            y[:nq] = model.mechanism.normalize_array(y[:nq])
+            if project is not None:
+                y[:nq], y[nq : nq + nv] = project(t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl])
+            if not np.isfinite(y.sum()):
+                raise NonFiniteError(f"the state became NaN or inf at t={t:.6g}; reduce dt or use a stiff method")
+        except GaussppError as exc:
+            failure = exc
+            break
+    return ts[:slot], ys[:slot], i, failure
+
+
+def _keep_indices(n_steps: int, t0: float, dt: float, record: Any) -> np.ndarray:
+    if np.isscalar(record):
+        every = int(record)  # type: ignore[arg-type]
+        if every < 1:
+            raise InputError(f"record must be a positive integer or an array of times, got {record!r}")
+        idx = np.arange(0, n_steps + 1, every)
+        return idx if idx[-1] == n_steps else np.append(idx, n_steps)
+    times = np.asarray(record, float)
+    idx = np.rint((times - t0) / dt).astype(int)
+    if (
+        np.any(np.abs(t0 + idx * dt - times) > 1e-9 * max(1.0, abs(times).max()))
+        or np.any(idx < 0)
+        or np.any(idx > n_steps)
+    ):
+        raise InputError("record times must lie on the fixed-step grid t0 + i·dt within [t0, t_end]")
+    return np.unique(idx)
+
+
+def _scipy(
+    meth: _methods.Method,
+    rhs: RightHandSide,
+    t0: float,
+    t_end: float,
+    y0: np.ndarray,
+    dt: float | None,
+    rtol: float,
+    atol: float,
+    record: Any,
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None]:
+    import scipy.integrate as si
+
+    options: dict[str, Any] = {"rtol": rtol, "atol": atol}
+    if dt is not None:
+        options.update(first_step=dt, max_step=dt)
+    solver_cls = getattr(si, meth.name)
+    solver = solver_cls(rhs, t0, y0, t_end, **options)
+    times = None if np.isscalar(record) else np.sort(np.asarray(record, float))
+    ts, ys, failure = [t0], [y0.copy()], None
+    steps = 0
+    while solver.status == "running":
+        try:
+            message = solver.step()
+        except GaussppError as exc:
+            failure = exc
+            break
+        if solver.status == "failed":
+            failure = NonFiniteError(f"{meth.name} failed at t={solver.t:.6g}: {message}")
+            break
+        steps += 1
+        if times is None:
+            ts.append(solver.t)
+            ys.append(solver.y.copy())
+        else:
+            dense = solver.dense_output()
+            inside = times[(times > ts[-1] if len(ts) > 1 else times >= t0) & (times <= solver.t)]
+            for tk in inside:
+                ts.append(float(tk))
+                ys.append(np.asarray(dense(tk)))
+    if times is not None and ts and times.size and times[0] > t0:
+        ts, ys = ts[1:], ys[1:]
+    return np.array(ts), np.array(ys).reshape(len(ts), y0.size), steps, failure
+
+
+# -- recording -------------------------------------------------------------------------------
+def _record(
+    model: Model,
+    rhs: RightHandSide,
+    ts: np.ndarray,
+    ys: np.ndarray,
+    meth: _methods.Method,
+    label: str,
+    steps: int,
+    failure: Exception | None,
+) -> tuple[Trajectory, Exception | None]:
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    N = ts.size
+    cols: dict[str, list[np.ndarray]] = {
+        k: [] for k in ("a", "u", "reaction", "compulsion", "Phi", "g", "S_hat", "energy")
+    }
+    kernel = rhs.kernel
+    record_failure: Exception | None = None
+    kept = N
+    for i in range(N):
+        y = ys[i]
+        try:
+            out = rhs.evaluate(ts[i], y, stabilized=False)
+        except GaussppError as exc:
+            record_failure, kept = exc, i
+            break
+        for k in cols:
+            cols[k].append(np.array(out[k], copy=True))
+    del kernel
+    ts, ys = ts[:kept], ys[:kept]
+    S = np.array(cols["S_hat"]).reshape(kept, model.k, -1) if kept else np.zeros((0, model.k, model.m))
+    margin = np.linalg.svd(S, compute_uv=False).min(axis=1) if kept and model.m >= model.k else np.zeros(kept)
+    bad = np.flatnonzero(margin < model.margin_error)
+    if bad.size and record_failure is None:
+        i = int(bad[0])
+        where = Where(
+            float(ts[i]),
+            label,
+            model._groups,
+            lambda: model.step_data(ts[i], ys[i, :nq], ys[i, nq : nq + nv], ys[i, nq + nv : nq + nv + nl]),
+        )
+        try:
+            to_result(
+                rhs.evaluate(ts[i], ys[i], stabilized=False),
+                where,
+                margin_warn=model.margin_warn,
+                margin_error=model.margin_error,
+            )
+        except GaussppError as exc:
+            record_failure = exc
+        ts, ys, margin, kept = ts[:i], ys[:i], margin[:i], i
+        cols = {k: v[:i] for k, v in cols.items()}
+    low = np.flatnonzero(margin < model.margin_warn)
+    if low.size:
+        warnings.warn(
+            f"realizability margin {margin[low[0]]:.3g} at t={ts[low[0]]:.6g} (smallest {margin.min():.3g}) is small: "
+            "the reaction is large and sensitive to errors",
+            RealizabilityWarning,
+            stacklevel=3,
+        )
+
+    def stack(key: str, width: int) -> np.ndarray:
+        return np.array(cols[key]).reshape(kept, width) if kept else np.zeros((0, width))
+
+    energy = stack("energy", 1).ravel() if model.has_energy else np.full(kept, np.nan)
+    traj = Trajectory(
+        t=ts.copy(),
+        q=ys[:, :nq].copy(),
+        v=ys[:, nq : nq + nv].copy(),
+        lam=ys[:, nq + nv : nq + nv + nl].copy(),
+        a=stack("a", nv),
+        u=stack("u", model.m),
+        reaction=stack("reaction", nv),
+        compulsion=stack("compulsion", 1).ravel(),
+        residual=stack("Phi", model.k),
+        g=stack("g", model.k),
+        margin=margin,
+        energy=energy,
+        work_reaction=ys[:, -2].copy(),
+        work_forces=ys[:, -1].copy() if model.has_force_power else np.full(kept, np.nan),
+        status="success",
+        message="",
+        method=meth.name,
+        solver=label,
+        steps=steps,
+        rhs_evaluations=rhs.evaluations,
+    )
+    return traj, record_failure
+
+
+def _failed(traj: Trajectory, failure: Exception) -> Trajectory:
+    return replace(traj, status="failed", message=f"{type(failure).__name__}: {failure}")
+
+
+__all__ = ["QP_TOLERANCE", "simulate"]

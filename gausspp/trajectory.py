@@ -1,0 +1,85 @@
+"""The Trajectory record: what a simulation computed, sample by sample (DESIGN §5)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """Arrays over the recorded samples (first axis: time).
+
+    Attributes
+    ----------
+    t : (N,) array
+    q : (N, nq) array
+    v : (N, nv) array
+    lam : (N, n_lam) array
+        ``λ`` of realizations that carry it (empty second axis otherwise).
+    a : (N, nv) array
+        Accelerations.
+    u : (N, m) array
+        Reaction unknowns (``λ`` or ``λ̇``).
+    reaction : (N, nv) array
+        ``R = [T] − F``.
+    compulsion : (N,) array
+        Gauss's compulsion ``Z`` of each step.
+    residual : (N, k) array
+        The constraint ``Φ(q, v, t)`` along the trajectory (drift).
+    g : (N, k) array
+        Holonomic residuals ``g(q, t)`` (0 on velocity-level rows).
+    margin : (N,) array
+        Realizability margin.
+    energy : (N,) array
+        Total energy (NaN if the model does not know it).
+    work_reaction, work_forces : (N,) arrays
+        Accumulated work of the reaction and of the non-conservative forces since ``t[0]``
+        (``work_forces`` NaN if the model does not know its forces' power).
+    status : {"success", "failed"}
+    message : str
+        Why a run failed (empty on success).
+    method, solver : str
+    steps, rhs_evaluations : int
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    lam: np.ndarray
+    a: np.ndarray
+    u: np.ndarray
+    reaction: np.ndarray
+    compulsion: np.ndarray
+    residual: np.ndarray
+    g: np.ndarray
+    margin: np.ndarray
+    energy: np.ndarray
+    work_reaction: np.ndarray
+    work_forces: np.ndarray
+    status: str
+    message: str
+    method: str
+    solver: str
+    steps: int
+    rhs_evaluations: int
+
+    @property
+    def success(self) -> bool:
+        """True if the run reached ``t_end``."""
+        return self.status == "success"
+
+    def energy_balance(self) -> np.ndarray:
+        """``E(t) − E(t₀) − W_reaction − W_forces``: zero for an exact motion (a free accuracy check).
+
+        Valid for kinetic and potential energies that do not depend on time explicitly.
+        """
+        return self.energy - self.energy[0] - self.work_reaction - self.work_forces
+
+    def max_residual(self) -> float:
+        """Largest ``|Φ|`` and ``|g|`` over the trajectory."""
+        return float(max(np.max(np.abs(self.residual), initial=0.0), np.max(np.abs(self.g), initial=0.0)))
+
+    def __len__(self) -> int:
+        return int(self.t.size)
