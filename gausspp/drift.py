@@ -87,6 +87,7 @@ def projection_function(model: Model, newton_steps: int = 3) -> ca.Function:
     mech, p = model.mechanism, model._expressions
     t, q, v, lam = mech.t, mech.q, mech.v, model.lam
     zero = ca.SX.zeros(2)
+    assert p.g is not None  # a model's step always carries its holonomic residuals
     pieces = ca.Function("pieces", [t, q, v, lam, model.stab], [p.A, p.J, p.D, p.Phi, p.g, mech.qdot])
     K = ca.Function("K", [q, v, t], [ca.jacobian(mech.qdot, v)])  # q̇ = K v for the affine kinematics used here
     rows = model.holonomic_rows

@@ -61,9 +61,16 @@ class CompiledKernel:
 
     compiled = True
 
-    def __init__(self, fn: ca.Function) -> None:
+    def __init__(self, fn: ca.Function, qp_parts: tuple[ca.Function, ca.Function, QPBackend] | None = None) -> None:
         self._f = _Bound(fn)
         self.inputs = self._f.args
+        #: for a QP posed in the graph: (build, finish, backend), to compose larger graphs
+        self.qp_parts = qp_parts
+
+    @property
+    def function(self) -> ca.Function:
+        """The compiled step as a casadi Function ``inputs -> OUTPUTS`` (to build larger graphs)."""
+        return self._f.fn
 
     def evaluate(self) -> None:
         """Re-evaluate on the values now in ``inputs`` (the hot path)."""
@@ -134,7 +141,9 @@ def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str
     mx_in = [ca.MX.sym(f"in{i}", s.sparsity()) for i, s in enumerate(inputs)]
     H, S, rhs = build(*mx_in)
     z_mx, y_mx = backend.graph(H, S, rhs)
-    kernel = CompiledKernel(ca.Function(f"{name}_qp", mx_in, list(finish(*mx_in, z_mx, y_mx))))
+    kernel = CompiledKernel(
+        ca.Function(f"{name}_qp", mx_in, list(finish(*mx_in, z_mx, y_mx))), (build, finish, backend)
+    )
     with stdout_silenced():  # some plugins (qpOASES) print a banner on their first solve
         try:
             kernel.evaluate()

@@ -103,7 +103,8 @@ def simulate(
     failure: Exception | None = None
     try:
         if meth.lane == "python":
-            ts, ys, steps, failure = _fixed_step(meth, rhs, model, stab, t0, t_end, float(dt), y0, record)
+            assert dt is not None  # checked above for fixed-step methods
+            ts, ys, steps, failure = _fixed_step(meth, rhs, model, stab, t0, t_end, dt, y0, record)
         elif meth.lane == "scipy":
             ts, ys, steps, failure = _scipy(meth, rhs, t0, t_end, y0, dt, rtol, atol, record)
         else:
@@ -241,8 +242,11 @@ def _scipy(
     solver_cls = getattr(si, meth.name)
     solver = solver_cls(rhs, t0, y0, t_end, **options)
     times = None if np.isscalar(record) else np.sort(np.asarray(record, float))
-    ts, ys, failure = [t0], [y0.copy()], None
-    steps = 0
+    if times is not None and (times.size == 0 or times[0] < t0 or times[-1] > t_end):
+        raise InputError(f"record times must lie within [t0, t_end] = [{t0:g}, {t_end:g}]")
+    keep_start = times is None or times[0] == t0
+    ts, ys = ([t0], [y0.copy()]) if keep_start else ([], [])
+    failure, steps, t_prev = None, 0, t0
     while solver.status == "running":
         try:
             message = solver.step()
@@ -258,12 +262,10 @@ def _scipy(
             ys.append(solver.y.copy())
         else:
             dense = solver.dense_output()
-            inside = times[(times > ts[-1] if len(ts) > 1 else times >= t0) & (times <= solver.t)]
-            for tk in inside:
+            for tk in times[(times > t_prev) & (times <= solver.t)]:
                 ts.append(float(tk))
                 ys.append(np.asarray(dense(tk)))
-    if times is not None and ts and times.size and times[0] > t0:
-        ts, ys = ts[1:], ys[1:]
+        t_prev = solver.t
     return np.array(ts), np.array(ys).reshape(len(ts), y0.size), steps, failure
 
 

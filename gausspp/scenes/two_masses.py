@@ -1,6 +1,7 @@
 """Two masses on a line (paper §1, DESIGN §6.1): one constraint, two realizations, two motions.
 
-Masses ``m1, m2`` on a line, a force ``F`` on ``m2``, the constraint ``ẋ₂ − ẋ₁ = 0``.
+Masses ``m1, m2`` on a line, a force ``F`` on ``m2`` (and, if ``k > 0``, a spring ``−k x₂`` to a
+wall, which makes the exact motion a sinusoid), the constraint ``ẋ₂ − ẋ₁ = 0``.
 
 * ``realization="ideal"`` — a rigid rod: both accelerate at ``F/(m1 + m2)``; the rod's
   tension is ``λ = m1 F/(m1 + m2)``.
@@ -24,25 +25,39 @@ REALIZATIONS = ("ideal", "servo")
 
 
 def build(
-    m1: float = 1.0, m2: float = 3.0, F: float = 2.0, realization: str = "ideal", v: float = 0.0, t_end: float = 1.0
+    m1: float = 1.0,
+    m2: float = 3.0,
+    F: float = 2.0,
+    realization: str = "ideal",
+    v: float = 0.0,
+    k: float = 0.0,
+    t_end: float = 1.0,
 ) -> Scene:
     """Two masses joined by a rod (ideal) or kept together by a follower force on ``m1`` (servo)."""
     if realization not in REALIZATIONS:
         raise UnknownNameError(f"two-masses: realization={realization!r} is unknown; use one of {list(REALIZATIONS)}")
-    if not (m1 > 0 and m2 > 0):
-        raise InputError(f"two-masses: masses must be positive, got m1={m1}, m2={m2}")
+    if not (m1 > 0 and m2 > 0 and k >= 0):
+        raise InputError(f"two-masses: need m1, m2 > 0 and k ≥ 0, got m1={m1}, m2={m2}, k={k}")
     body = Lagrangian(
         n=2,
         T=lambda q, v, t: 0.5 * m1 * v[0] ** 2 + 0.5 * m2 * v[1] ** 2,
         F=lambda q, v, t: [0, F],
+        V=lambda q, t: 0.5 * k * q[1] ** 2,
     )
     real = Ideal() if realization == "ideal" else Force(M=lambda q, v, t: [1, 0])
     model = Model(body, [Constraint(lambda q, v, t: v[1] - v[0], name="rod", realization=real)])
-    acc = F / (m1 + m2) if realization == "ideal" else F / m2
+    inertia = m1 + m2 if realization == "ideal" else m2  # what F − k x₂ accelerates
     q0, v0 = np.array([0.0, 1.0]), np.array([v, v])
 
     def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
-        return q0 + v0 * t + 0.5 * acc * t * t, v0 + acc * t
+        if k == 0:
+            acc = F / inertia
+            return q0 + v0 * t + 0.5 * acc * t * t, v0 + acc * t
+        w = np.sqrt(k / inertia)
+        rest = F / k  # x₂ about its equilibrium: harmonic with frequency w
+        x2 = rest + (q0[1] - rest) * np.cos(w * t) + v / w * np.sin(w * t)
+        v2 = -(q0[1] - rest) * w * np.sin(w * t) + v * np.cos(w * t)
+        return np.array([x2 - 1.0, x2]), np.array([v2, v2])
 
     return Scene(
         name="two-masses",
@@ -53,5 +68,5 @@ def build(
         t_end=t_end,
         exact=exact,
         description="two masses on a line, rod (ideal) or follower force (servo); paper §1",
-        params=dict(m1=m1, m2=m2, F=F, realization=realization, v=v, t_end=t_end),
+        params=dict(m1=m1, m2=m2, F=F, realization=realization, v=v, k=k, t_end=t_end),
     )

@@ -1,0 +1,176 @@
+"""The compiled lane: the whole right-hand side as one casadi graph.
+
+``rk4-compiled`` chains RK4 steps with ``mapaccum``: the whole run is one C call. ``cvodes``
+hands the (direct-path) right-hand side to SUNDIALS CVODES through ``casadi.integrator``.
+Both return the states on their grid; recording is the caller's job.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from . import methods as _methods
+from .drift import Stabilization, projection_function
+from .errors import GaussppError, InputError, NonFiniteError
+from .kernel import CompiledKernel
+from .model import Model
+from .step import OUTPUTS
+
+_RHS_OUTPUTS = [OUTPUTS.index(k) for k in ("qdot", "a", "u", "power_reaction", "power_forces")]
+
+
+def _only(fn: ca.Function, outputs: list[int]) -> ca.Function:
+    """An SX function computing only the chosen outputs (the rest is dropped from the graph)."""
+    args = fn.sx_in()
+    res = fn.call(args)
+    return ca.Function(f"{fn.name()}_part", args, [res[i] for i in outputs])
+
+
+def rhs_function(model: Model, solver: str, backend: str | None) -> ca.Function:
+    """``F(t, y, stab) -> y'`` with ``y = (q, v, λ, W_R, W_F)``, the step inside the graph.
+
+    With ``solver="direct"`` the result is a pure SX function (one flat instruction list); with
+    a casadi QP backend an MX graph around the conic node, computing only what ``y'`` needs.
+    """
+    kernel = model.kernel(solver, backend)
+    if not isinstance(kernel, CompiledKernel):
+        raise InputError(
+            f"the compiled lane needs the step inside the casadi graph: use solver='direct' or a casadi QP "
+            f"backend (casadi:qrqp, casadi:daqp, casadi:osqp, ...), not {backend!r}"
+        )
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    t, y, stab = ca.MX.sym("t"), ca.MX.sym("y", nq + nv + nl + 2), ca.MX.sym("stab", 2)
+    args = [t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], stab]
+    if kernel.qp_parts is None:
+        qdot, a, u, pR, pF = _only(kernel.function, _RHS_OUTPUTS)(*args)
+    else:
+        build, finish, qp_backend = kernel.qp_parts
+        H, S, rhs = build(*args)
+        z, mult = qp_backend.graph(H, S, rhs)
+        qdot, a, u, pR, pF = _only(finish, _RHS_OUTPUTS)(*args, z, mult)
+    lam_dot = ca.vertcat(*[u[i] for i in model.lam_columns]) if model.lam_columns else ca.MX(0, 1)
+    F = ca.Function("rhs", [t, y, stab], [ca.vertcat(qdot, a, lam_dot, pR, pF)])
+    return F.expand() if kernel.qp_parts is None else F
+
+
+def _rk_step(model: Model, F: ca.Function, tableau: _methods.Tableau, stab: Stabilization) -> ca.Function:
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    t, h, y, s = ca.MX.sym("t"), ca.MX.sym("h"), ca.MX.sym("y", F.size1_in(1)), ca.MX.sym("stab", 2)
+    stages: list[ca.MX] = []
+    for c, row in zip(tableau.c, tableau.A, strict=True):
+        yi = y
+        for a, k in zip(row, stages, strict=False):
+            if a:
+                yi = yi + h * a * k
+        stages.append(F(t + c * h, yi, s))
+    y1 = y
+    for b, k in zip(tableau.b, stages, strict=True):
+        y1 = y1 + h * b * k
+    q1 = _normalize(model, y1[:nq])
+    v1, lam1 = y1[nq : nq + nv], y1[nq + nv : nq + nv + nl]
+    if stab.project:
+        q1, v1 = projection_function(model)(t + h, q1, v1, lam1)
+    y1 = ca.vertcat(q1, v1, lam1, y1[nq + nv + nl :])
+    step = ca.Function("rk_step", [y, t, h, s], [y1])
+    try:
+        return step.expand()  # direct path: one flat SX instruction list for the whole step
+    except RuntimeError:
+        return step  # a conic node cannot be expanded; the QP stays a call in the MX graph
+
+
+def _normalize(model: Model, q: ca.MX) -> ca.MX:
+    qs = ca.SX.sym("q", model.nq)
+    return ca.Function("normalize", [qs], [model.mechanism.normalize(qs)])(q)
+
+
+def integrate_compiled(
+    meth: _methods.Method,
+    model: Model,
+    solver: str,
+    backend: str | None,
+    stab: Stabilization,
+    t0: float,
+    t_end: float,
+    dt: float | None,
+    y0: np.ndarray,
+    rtol: float,
+    atol: float,
+    record: Any,
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None]:
+    """Run a compiled-lane method; return ``(t, Y, steps, failure)`` on the recorded grid."""
+    F = rhs_function(model, solver, backend)
+    if meth.name == "cvodes":
+        return _cvodes(model, F, solver, stab, t0, t_end, dt, y0, rtol, atol, record)
+    assert meth.tableau is not None and dt is not None
+    n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
+    times = t0 + dt * np.arange(n_steps + 1)
+    times[-1] = t_end
+    step = _rk_step(model, F, meth.tableau, stab)
+    run = step.mapaccum("run", n_steps)
+    Y = np.array(run(y0, times[:-1][None, :], np.diff(times)[None, :], np.array(stab.stab))).T
+    Y = np.vstack([y0[None, :], Y])
+    failure: Exception | None = None
+    finite = np.isfinite(Y).all(axis=1)
+    if not finite.all():
+        first = int(np.argmin(finite))
+        Y, times = Y[:first], times[:first]
+        failure = NonFiniteError(
+            f"the state became NaN or inf in the step from t={times[-1]:.6g}; the step there failed "
+            "(unrealizable, not positive definite, or unstable for this dt)"
+        )
+    keep = _record_indices(times.size - 1, record) if np.isscalar(record) else _on_grid(times, record)
+    return times[keep], Y[keep], times.size - 1, failure
+
+
+def _record_indices(last: int, every: Any) -> np.ndarray:
+    idx = np.arange(0, last + 1, max(int(every), 1))
+    return idx if idx[-1] == last else np.append(idx, last)
+
+
+def _on_grid(times: np.ndarray, record: Any) -> np.ndarray:
+    wanted = np.asarray(record, float)
+    idx = np.searchsorted(times, wanted - 1e-12)
+    if np.any(idx >= times.size) or np.any(np.abs(times[np.minimum(idx, times.size - 1)] - wanted) > 1e-9):
+        raise InputError("record times must lie on the fixed-step grid t0 + i·dt within [t0, t_end]")
+    return idx
+
+
+def _cvodes(
+    model: Model,
+    F: ca.Function,
+    solver: str,
+    stab: Stabilization,
+    t0: float,
+    t_end: float,
+    dt: float | None,
+    y0: np.ndarray,
+    rtol: float,
+    atol: float,
+    record: Any,
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None]:
+    if solver != "direct":
+        raise InputError("method='cvodes' needs solver='direct': CVODES differentiates the right-hand side")
+    if stab.project:
+        raise InputError("method='cvodes' cannot project between its internal steps; use stabilize='baumgarte'")
+    if np.isscalar(record):
+        grid = np.arange(t0, t_end, dt) if dt else np.linspace(t0, t_end, 201)
+        grid = np.append(grid[grid < t_end], t_end)
+    else:
+        grid = np.unique(np.concatenate([[t0], np.asarray(record, float)]))
+    y, t, s = ca.MX.sym("y", y0.size), ca.MX.sym("t"), ca.MX.sym("stab", 2)
+    dae = {"x": y, "t": t, "p": s, "ode": F(t, y, s)}
+    opts: dict[str, Any] = {"abstol": atol, "reltol": rtol, "max_num_steps": 10**7}
+    if dt:  # as for scipy's methods: dt is the first and the largest step
+        opts.update(step0=dt, max_step_size=dt)
+    integrator = ca.integrator("cvodes", "cvodes", dae, t0, grid[1:], opts)
+    try:
+        xf = np.array(integrator(x0=y0, p=np.array(stab.stab))["xf"]).T
+    except RuntimeError as exc:
+        raise GaussppError(f"CVODES failed between t={t0:.6g} and t={t_end:.6g}: {str(exc).splitlines()[-1]}") from None
+    stats = integrator.stats()
+    steps = int(stats.get("nsteps", 0)) if isinstance(stats, dict) else 0
+    Y = np.vstack([y0[None, :], xf])
+    return grid, Y, steps, None

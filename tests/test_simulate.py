@@ -1,0 +1,139 @@
+"""simulate (DESIGN §5): convergence orders, exact motions, λ state, drift control, failures."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import gausspp as gp
+
+SPRING = {"realization": "servo", "k": 3.0, "v": 0.5}
+
+
+def final_error(method: str, dt: float) -> float:
+    s = gp.scenes.get("two-masses", **SPRING)
+    meth = gp.methods.get(method)
+    loose = {"rtol": 1e2, "atol": 1e2} if meth.adaptive else {}  # impose the step: accept every step
+    traj = gp.simulate(s.model, s.q0, s.v0, 2.0, dt=dt, method=method, solver="direct", **loose)
+    q, v = s.exact(traj.t[-1])
+    return max(np.abs(traj.q[-1] - q).max(), np.abs(traj.v[-1] - v).max())
+
+
+@pytest.mark.parametrize("method", gp.methods.names())
+def test_convergence_order(method: str) -> None:
+    order = gp.methods.get(method).order
+    steps = [0.8, 0.4, 0.2] if order > 6 else [0.2, 0.1, 0.05, 0.025] if order > 1 else [0.02, 0.01, 0.005, 0.0025]
+    errors = [final_error(method, h) for h in steps]
+    slope = np.polyfit(np.log(steps), np.log(errors), 1)[0]
+    shown = ", ".join(f"{e:.1e}" for e in errors)
+    print(f"{method}: errors [{shown}], observed order {slope:.2f}, declared {order}")
+    assert abs(slope - order) <= 0.5
+
+
+@pytest.mark.parametrize("method", ["rk4", "rk4-compiled", "DOP853"])
+@pytest.mark.parametrize("realization", ["ideal", "servo"])
+def test_two_masses_exact_quadratic_motion(realization: str, method: str) -> None:
+    s = gp.scenes.get("two-masses", realization=realization, v=0.3)
+    for solver in ("direct", "qp"):
+        traj = gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.05, method=method, solver=solver, rtol=1e-12, atol=1e-14)
+        for t, q, v in zip(traj.t, traj.q, traj.v, strict=True):
+            qe, ve = s.exact(t)
+            np.testing.assert_allclose(q, qe, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(v, ve, rtol=0, atol=1e-12)
+        assert traj.success and np.abs(traj.energy_balance()).max() < 1e-12
+
+
+def test_lam_state_is_integrated_and_lam0_required() -> None:
+    body = gp.Lagrangian(n=2, T=lambda q, v, t: 0.5 * ca.sumsqr(v), F=lambda q, v, t: [0.0, 1.0])
+    model = gp.Model(body, gp.Constraint(lambda q, v, t: v[1] - v[0], realization=gp.Inertial(N=lambda q, v, t: v[0])))
+    with pytest.raises(gp.MissingMultiplierError, match="lam0"):
+        gp.simulate(model, [0, 0], [0, 0], 1.0, dt=0.1)
+    traj = gp.simulate(model, [0, 0], [0, 0], 1.0, dt=0.1, lam0=[0.2], solver="direct")
+    # N = v₀: R = −λ̇ (1, 0) acts on mass 1 only, so both accelerate at F/m₂ = 1 and λ̇ = −1
+    np.testing.assert_allclose(traj.lam[:, 0], 0.2 - traj.t, atol=1e-13)
+    np.testing.assert_allclose(traj.u[:, 0], -1.0, atol=1e-13)
+
+
+def collapsing_model() -> gp.Model:
+    """A mass matrix that stops being positive definite when q₀ reaches 1."""
+    mech = gp.MassMatrix(n=2, A=lambda q, t: [[1.0, 0.0], [0.0, 1.0 - q[0]]], f=lambda q, v, t: [0.0, 0.0])
+    return gp.Model(mech, gp.Constraint(lambda q, v, t: v[1], name="hold"))
+
+
+@pytest.mark.parametrize("method", ["rk4", "RK45", "rk4-compiled"])
+def test_failure_midway_keeps_the_prefix(method: str) -> None:
+    model = collapsing_model()
+    traj = gp.simulate(model, [0.0, 0.0], [1.0, 0.0], 2.0, dt=0.01, method=method, solver="direct", throw=False)
+    assert traj.status == "failed" and not traj.success
+    assert len(traj) > 10 and 0.9 < traj.t[-1] < 1.0  # everything before the collapse at t = 1
+    assert "t=" in traj.message
+    with pytest.raises(gp.GaussppError) as info:
+        gp.simulate(model, [0.0, 0.0], [1.0, 0.0], 2.0, dt=0.01, method=method, solver="direct")
+    kept = info.value.trajectory  # type: ignore[attr-defined]
+    assert kept.status == "failed" and len(kept) == len(traj)
+
+
+def test_initial_data_off_the_constraint() -> None:
+    s = gp.scenes.get("two-masses", realization="servo")
+    with pytest.raises(gp.InitialDataError, match=r"off the constraint 'rod' at t=0: Φ\(q, v, t\) = 0.5"):
+        gp.simulate(s.model, s.q0, [0.0, 0.5], 1.0, dt=0.1)
+    traj = gp.simulate(s.model, s.q0, [0.0, 0.5], 1.0, dt=0.1, stabilize="project")
+    assert abs(traj.residual[0, 0]) < 1e-15
+    # projected along the servo's direction A⁻¹D = (1/m1, 0): only mass 1 was moved
+    np.testing.assert_allclose(traj.v[0], [0.5, 0.5])
+
+
+def circle_particle() -> gp.Model:
+    body = gp.Lagrangian(n=2, T=lambda q, v, t: 0.5 * ca.sumsqr(v), V=lambda q, t: 9.81 * q[1])
+    return gp.Model(body, gp.Holonomic(lambda q, t: ca.sumsqr(q) - 1.0, name="circle"))
+
+
+def test_baumgarte_and_projection_control_drift() -> None:
+    model = circle_particle()
+    kwargs = dict(dt=0.01, method="symplectic-euler", solver="direct")
+    raw = gp.simulate(model, [1.0, 0.0], [0.0, 0.0], 5.0, **kwargs)
+    baum = gp.simulate(model, [1.0, 0.0], [0.0, 0.0], 5.0, stabilize=gp.Baumgarte.critical(0.05), **kwargs)
+    proj = gp.simulate(model, [1.0, 0.0], [0.0, 0.0], 5.0, stabilize="project", **kwargs)
+    drift = [np.abs(x.g).max() for x in (raw, baum, proj)]
+    print("max |g|: raw {:.2e}, Baumgarte {:.2e}, projection {:.2e}".format(*drift))
+    assert np.abs(raw.g).max() > 1e-2
+    assert np.abs(baum.g).max() < 0.1 * np.abs(raw.g).max()
+    assert proj.max_residual() < 1e-12
+
+
+def test_suslov_drift_over_1e5_rk4_steps() -> None:
+    s = gp.scenes.get("rigid-body-servo")
+    kwargs = dict(dt=1e-3, method="rk4-compiled", solver="direct", record=1000)
+    raw = gp.simulate(s.model, s.q0, s.v0, 100.0, **kwargs)
+    stab = gp.simulate(s.model, s.q0, s.v0, 100.0, stabilize="project", **kwargs)
+    assert raw.steps == stab.steps == 100_000
+    growth = np.abs(raw.residual[:, 0])
+    print(f"|Φ| without stabilization: {growth[1]:.1e} at t={raw.t[1]:g} → {growth.max():.1e} max over t ≤ 100")
+    assert np.abs(stab.residual).max() <= 1e-10
+    assert np.all(np.abs(np.linalg.norm(stab.q, axis=1) - 1.0) < 1e-14)  # the quaternion stays unit
+
+
+def test_record_options() -> None:
+    s = gp.scenes.get("two-masses")
+    traj = gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.1, record=[0.0, 0.5, 1.0], solver="direct")
+    np.testing.assert_allclose(traj.t, [0.0, 0.5, 1.0])
+    with pytest.raises(gp.InputError, match="grid"):
+        gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.1, record=[0.55], solver="direct")
+    dense = gp.simulate(s.model, s.q0, s.v0, 1.0, method="DOP853", record=np.linspace(0, 1, 11), solver="direct")
+    np.testing.assert_allclose(dense.t, np.linspace(0, 1, 11))
+    np.testing.assert_allclose(dense.q[5], s.exact(0.5)[0], atol=1e-12)
+
+
+def test_bad_arguments() -> None:
+    s = gp.scenes.get("two-masses")
+    with pytest.raises(gp.UnknownNameError, match="method='rk5' is unknown; valid methods"):
+        gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.1, method="rk5")
+    with pytest.raises(gp.InputError, match="fixed step: give dt"):
+        gp.simulate(s.model, s.q0, s.v0, 1.0)
+    with pytest.raises(gp.InputError, match="t0 < t_end"):
+        gp.simulate(s.model, s.q0, s.v0, -1.0, dt=0.1)
+    with pytest.raises(gp.InputError, match="needs solver='direct'"):
+        gp.simulate(s.model, s.q0, s.v0, 1.0, method="cvodes", solver="qp")
+    with pytest.raises(gp.InputError, match="compiled lane needs"):
+        gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.1, method="rk4-compiled", backend="qpsolvers:osqp")
