@@ -110,19 +110,47 @@ def integrate_compiled(
     times[-1] = t_end
     step = _rk_step(model, F, meth.tableau, stab)
     run = step.mapaccum("run", n_steps)
-    Y = np.array(run(y0, times[:-1][None, :], np.diff(times)[None, :], np.array(stab.stab))).T
-    Y = np.vstack([y0[None, :], Y])
+    h, s = np.diff(times)[None, :], np.array(stab.stab)
+    try:
+        Y = np.vstack([y0[None, :], np.array(run(y0, times[:-1][None, :], h, s)).T])
+    except RuntimeError:  # a QP plugin refused non-finite data somewhere: redo step by step to keep the prefix
+        Y = _step_by_step(step, y0, times, s)
     failure: Exception | None = None
     finite = np.isfinite(Y).all(axis=1)
-    if not finite.all():
-        first = int(np.argmin(finite))
+    if Y.shape[0] < times.size or not finite.all():
+        first = int(np.argmin(finite)) if not finite.all() else Y.shape[0]
         Y, times = Y[:first], times[:first]
-        failure = NonFiniteError(
-            f"the state became NaN or inf in the step from t={times[-1]:.6g}; the step there failed "
-            "(unrealizable, not positive definite, or unstable for this dt)"
-        )
+        failure = _diagnose(model, solver, backend, times[-1], Y[-1], times[-1] + dt)
     keep = _record_indices(times.size - 1, record) if np.isscalar(record) else _on_grid(times, record)
     return times[keep], Y[keep], times.size - 1, failure
+
+
+def _step_by_step(step: ca.Function, y0: np.ndarray, times: np.ndarray, stab: np.ndarray) -> np.ndarray:
+    ys = [y0]
+    for t, t_next in zip(times[:-1], times[1:], strict=True):
+        try:
+            y = np.array(step(ys[-1], t, t_next - t, stab)).ravel()
+        except RuntimeError:
+            break
+        ys.append(y)
+        if not np.isfinite(y).all():
+            break
+    return np.array(ys)
+
+
+def _diagnose(model: Model, solver: str, backend: str | None, t: float, y: np.ndarray, t_next: float) -> Exception:
+    """Name what failed in the step after the last good state ``y`` at ``t``."""
+    from ._rhs import RightHandSide
+
+    rhs = RightHandSide(model, solver, backend, Stabilization())
+    try:
+        rhs.evaluate(t, y)
+    except GaussppError as exc:
+        return exc
+    return NonFiniteError(
+        f"the state became NaN or inf in the step from t={t:.6g} to t={t_next:.6g}: a stage of the step failed "
+        "(unrealizable, mass matrix not positive definite, or unstable for this dt); reduce dt or use a stiff method"
+    )
 
 
 def _record_indices(last: int, every: Any) -> np.ndarray:

@@ -282,6 +282,9 @@ def _record(
 ) -> tuple[Trajectory, Exception | None]:
     nq, nv, nl = model.nq, model.nv, model.n_lam
     N = ts.size
+    ys = ys.copy()
+    for row in ys:  # adaptive lanes integrate q freely: bring samples back onto the manifold (unit quaternions)
+        row[:nq] = model.mechanism.normalize_array(row[:nq])
     cols: dict[str, list[np.ndarray]] = {
         k: [] for k in ("a", "u", "reaction", "compulsion", "Phi", "g", "S_hat", "energy")
     }

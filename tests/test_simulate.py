@@ -137,3 +137,11 @@ def test_bad_arguments() -> None:
         gp.simulate(s.model, s.q0, s.v0, 1.0, method="cvodes", solver="qp")
     with pytest.raises(gp.InputError, match="compiled lane needs"):
         gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.1, method="rk4-compiled", backend="qpsolvers:osqp")
+
+
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+def test_compiled_lane_failure_keeps_prefix(solver: str) -> None:
+    traj = gp.simulate(
+        collapsing_model(), [0.0, 0.0], [1.0, 0.0], 2.0, dt=0.01, method="rk4-compiled", solver=solver, throw=False
+    )
+    assert traj.status == "failed" and 0.9 < traj.t[-1] < 1.0 and len(traj) > 10
