@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import qp
-from ._outcome import QP_TOLERANCE, Where, to_result
+from ._outcome import QP_TOLERANCE, Where, evaluation_failed, to_result
 from .drift import Stabilization
 from .model import Model
 
@@ -35,9 +35,15 @@ class RightHandSide:
         inputs[0][0] = t
         inputs[1][:], inputs[2][:], inputs[3][:] = y[sq], y[sv], y[sl]
         inputs[4][:] = self.stab if stabilized else 0.0
-        self.kernel.evaluate()
-        out = self.kernel.result()
         self.evaluations += 1
+        try:
+            self.kernel.evaluate()
+        except RuntimeError as exc:  # casadi refused to evaluate: explain it from the step's data
+            m = self.model
+            q, v, lam = y[sq].copy(), y[sv].copy(), y[sl].copy()
+            where = Where(float(t), self.solver, m._groups, lambda: m.step_data(t, q, v, lam))
+            raise evaluation_failed(exc, where, margin_error=m.margin_error) from None
+        out = self.kernel.result()
         ok = out["pivot"][0] > 0 and np.isfinite(out["checksum"][0]) and out["qp_primal"][0] <= QP_TOLERANCE
         if ok and self._scalar_margin:
             ok = abs(out["S_hat"].flat[0]) >= self.model.margin_error

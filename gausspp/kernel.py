@@ -124,6 +124,20 @@ def _dense(exprs: list[ca.SX]) -> list[ca.SX]:
     return [ca.densify(e) for e in exprs]
 
 
+def _guard(build: ca.Function) -> ca.Function:
+    """QP data with NaN/inf replaced by zeros: a plugin must never see them (casadi aborts the whole
+    call). The step's own outputs still carry the NaN, which the checks then diagnose."""
+    args = build.sx_in()
+    H, S, rhs = build.call(args)
+    total = ca.sum1(ca.vec(S)) + ca.sum1(rhs)
+    finite = ca.fabs(total) < ca.inf  # false for NaN and ±inf
+    return ca.Function(
+        f"{build.name()}_guarded",
+        args,
+        [H, ca.if_else(finite, S, ca.SX.zeros(S.shape)), ca.if_else(finite, rhs, 0 * rhs)],
+    )
+
+
 def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str, backend: QPBackend | None) -> Kernel:
     """Compile the step ``p`` (expressions of ``inputs``) for ``solver`` ∈ {"direct", "qp"}."""
     red = reduce(p)
@@ -139,6 +153,7 @@ def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str
     if not backend.compiled:
         return PythonQPKernel(build, finish, backend)
     mx_in = [ca.MX.sym(f"in{i}", s.sparsity()) for i, s in enumerate(inputs)]
+    build = _guard(build)
     H, S, rhs = build(*mx_in)
     z_mx, y_mx = backend.graph(H, S, rhs)
     kernel = CompiledKernel(
