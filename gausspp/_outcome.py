@@ -45,6 +45,10 @@ class Where:
     data: Callable[[], StepProblem]
 
 
+def _smallest(values: np.ndarray) -> float:
+    return float(np.min(values)) if values.size else 0.0
+
+
 def _where(t: float) -> str:
     return f"at t={t:.6g}"
 
@@ -82,7 +86,7 @@ def _not_positive_definite(data: StepProblem, t: float) -> NotPositiveDefiniteEr
 def _unrealizable(
     data: StepProblem, t: float, margin: float, groups: list[Group], margin_error: float
 ) -> RealizabilityError:
-    solo = [(float(np.min(cosines(data.A, data.J[g.rows], data.D[:, g.cols]), initial=0.0)), g) for g in groups]
+    solo = [(_smallest(cosines(data.A, data.J[g.rows], data.D[:, g.cols])), g) for g in groups]
     worst_margin, worst = min(solo, key=lambda s: s[0])
     if worst_margin < margin_error or len(groups) == 1:
         realization = f" by its {worst.label} realization" if worst.label else ""
@@ -110,7 +114,7 @@ def evaluation_failed(exc: RuntimeError, where: Where, *, margin_error: float) -
     _check_data(d, t, groups)
     if not np.all(np.linalg.eigvalsh(0.5 * (d.A + d.A.T)) > 0) or not np.allclose(d.A, d.A.T, rtol=1e-12, atol=0):
         return _not_positive_definite(d, t)
-    margin = float(np.min(cosines(d.A, d.J, d.D), initial=0.0))
+    margin = _smallest(cosines(d.A, d.J, d.D))
     if margin < margin_error:
         return _unrealizable(d, t, margin, groups, margin_error)
     return QPSolveError(f"the step failed {_where(t)} in {solver}: {str(exc).strip().splitlines()[-1]}")
@@ -154,8 +158,8 @@ def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, m
         primal, dual = float(out["qp_primal"][0]), float(out["qp_dual"][0])
         if not primal <= QP_TOLERANCE:
             raise QPSolveError(
-                f"QP backend {solver} did not solve the step {_where(t)}: relative primal residual {primal:.3g}; "
-                "tighten its tolerances, use backend='casadi:qrqp', or solver='direct'"
+                f"QP backend {solver} did not solve the step {_where(t)}: relative primal residual {primal:.3g} "
+                f"(realizability margin {margin:.3g}); try another backend (gausspp.qp.names()) or solver='direct'"
             )
         qp_res = (primal, dual)
     return StepResult(

@@ -11,6 +11,7 @@ import numpy as np
 from . import qp
 from ._outcome import QP_TOLERANCE, Where, evaluation_failed, to_result
 from .drift import Stabilization
+from .errors import NonFiniteError
 from .model import Model
 
 
@@ -48,6 +49,12 @@ class RightHandSide:
         if ok and self._scalar_margin:
             ok = abs(out["S_hat"].flat[0]) >= self.model.margin_error
         if not ok:  # diagnose: raises the project error that explains the failure
+            size = float(np.max(np.abs(y)))
+            if not size < 1e100:
+                raise NonFiniteError(
+                    f"the state diverged at t={t:.6g} (largest component {size:.3g}): the integration is unstable; "
+                    "reduce dt or use a stiff method (Radau, BDF, cvodes)"
+                )
             m = self.model
             q, v, lam = y[sq].copy(), y[sv].copy(), y[sl].copy()
             where = Where(float(t), self.solver, m._groups, lambda: m.step_data(t, q, v, lam))

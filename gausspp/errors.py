@@ -63,6 +63,10 @@ class QPSolveError(GaussppError):
     """A QP backend did not return a solution of the requested accuracy."""
 
 
+class IntegrationError(GaussppError):
+    """The time integrator could not continue (step size underflow, too many steps)."""
+
+
 class BackendUnavailableError(GaussppError, ImportError):
     """A known QP backend is not installed on this machine."""
 

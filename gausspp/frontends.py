@@ -174,6 +174,10 @@ class MassMatrix(Mechanism):
         ``q̇`` when ``v`` are quasi-velocities (then give ``nq``); default ``q̇ = v``.
     nq : int, optional
         Number of configuration coordinates when ``kinematics`` is given.
+    nonconservative : callable ``(q, v, t) -> (n,)``, optional
+        The non-conservative applied forces contained in ``f`` (zero if the system has none),
+        so that trajectories can close the energy balance ``dE/dt = v·(F_nc + R)``; unknown
+        (NaN work) if not given.
     """
 
     symmetric_by_construction = False
@@ -186,6 +190,7 @@ class MassMatrix(Mechanism):
         energy: Expr | None = None,
         kinematics: Expr | None = None,
         nq: int | None = None,
+        nonconservative: Expr | None = None,
     ) -> None:
         n = _check_n(n)
         nq = n if nq is None else _check_n(nq)
@@ -198,6 +203,8 @@ class MassMatrix(Mechanism):
         self.qdot = v if kinematics is None else evaluate(kinematics, (q, v, t), (nq, 1), "kinematics(q, v, t)")
         self._coordinates = kinematics is None
         self.energy = evaluate(energy, (q, v, t), (1, 1), "energy(q, v, t)") if energy is not None else None
+        if nonconservative is not None:
+            self.F_nc = evaluate(nonconservative, (q, v, t), (n, 1), "nonconservative(q, v, t)")
 
     def lagrange_rows(self, N: ca.SX) -> ca.SX:
         if not self._coordinates:

@@ -148,8 +148,13 @@ def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str
     assert backend is not None
     k, m = red.S_hat.shape
     z, y = ca.SX.sym("z", m), ca.SX.sym("y", k)
-    build = ca.Function(f"{name}_qp_data", inputs, _dense([ca.SX.eye(m), red.S_hat, red.rhs_hat]))
-    finish = ca.Function(f"{name}_qp_finish", [*inputs, z, y], _dense(outputs(p, red, z, y)))
+    # Rows scaled to unit length: a small margin makes Ŝ small, which QP codes take for a
+    # degenerate row; the scaled constraint is the same set, and y is scaled back for the checks.
+    norms = ca.sqrt(ca.sum2(red.S_hat * red.S_hat))
+    rows = ca.if_else(norms > 0, 1 / norms, 1)
+    scaled = ca.diag(rows) @ red.S_hat
+    build = ca.Function(f"{name}_qp_data", inputs, _dense([ca.SX.eye(m), scaled, rows * red.rhs_hat]))
+    finish = ca.Function(f"{name}_qp_finish", [*inputs, z, y], _dense(outputs(p, red, z, rows * y)))
     if not backend.compiled:
         return PythonQPKernel(build, finish, backend)
     mx_in = [ca.MX.sym(f"in{i}", s.sparsity()) for i, s in enumerate(inputs)]

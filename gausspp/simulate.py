@@ -14,6 +14,7 @@ from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
+import casadi as ca
 import numpy as np
 
 from . import methods as _methods
@@ -21,7 +22,7 @@ from . import qp
 from ._outcome import QP_TOLERANCE, Where, to_result
 from ._rhs import RightHandSide
 from .drift import Baumgarte, Stabilization, as_stabilization, projection_function
-from .errors import GaussppError, InitialDataError, InputError, NonFiniteError, RealizabilityWarning
+from .errors import GaussppError, InitialDataError, InputError, IntegrationError, NonFiniteError, RealizabilityWarning
 from .model import Model
 from .trajectory import Trajectory
 
@@ -239,6 +240,8 @@ def _scipy(
     options: dict[str, Any] = {"rtol": rtol, "atol": atol}
     if dt is not None:
         options.update(first_step=dt, max_step=dt)
+    if meth.name in ("Radau", "BDF"):  # implicit methods: the exact Jacobian from casadi where it exists
+        options["jac"] = _jacobian(rhs)
     solver_cls = getattr(si, meth.name)
     solver = solver_cls(rhs, t0, y0, t_end, **options)
     times = None if np.isscalar(record) else np.sort(np.asarray(record, float))
@@ -254,7 +257,10 @@ def _scipy(
             failure = exc
             break
         if solver.status == "failed":
-            failure = NonFiniteError(f"{meth.name} failed at t={solver.t:.6g}: {message}")
+            failure = IntegrationError(
+                f"{meth.name} stopped at t={solver.t:.6g}: {message}; near a singular or very stiff state — "
+                "check the realizability margin there, loosen rtol/atol, or try a stiff method"
+            )
             break
         steps += 1
         if times is None:
@@ -267,6 +273,24 @@ def _scipy(
                 ys.append(np.asarray(dense(tk)))
         t_prev = solver.t
     return np.array(ts), np.array(ys).reshape(len(ts), y0.size), steps, failure
+
+
+def _jacobian(rhs: RightHandSide) -> Any:
+    """``∂F/∂y`` by casadi on the direct path; for a QP step, the structure only (the works feed nothing back)."""
+    from ._compiled import rhs_function
+
+    n = rhs.model.nq + rhs.model.nv + rhs.model.n_lam + 2
+    if rhs.solver == "direct":
+        F = rhs_function(rhs.model, "direct", None)
+        t, y, s = ca.SX.sym("t"), ca.SX.sym("y", n), ca.SX.sym("stab", 2)
+        jac = ca.Function("rhs_jacobian", [t, y, s], [ca.jacobian(F(t, y, s), y)])
+        stab = rhs.stab
+
+        def exact(t_: float, y_: np.ndarray) -> np.ndarray:
+            return np.array(jac(t_, y_, stab))
+
+        return exact
+    return None
 
 
 # -- recording -------------------------------------------------------------------------------

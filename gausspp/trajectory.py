@@ -71,11 +71,16 @@ class Trajectory:
         return self.status == "success"
 
     def energy_balance(self) -> np.ndarray:
-        """``E(t) − E(t₀) − W_reaction − W_forces``: zero for an exact motion (a free accuracy check).
+        """``ΔE − ΔW_reaction − ΔW_forces`` since the first sample: zero for an exact motion.
 
-        Valid for kinetic and potential energies that do not depend on time explicitly.
+        A free accuracy check. Valid for kinetic and potential energies that do not depend on
+        time explicitly; NaN where the model does not know its energy or its forces' power.
         """
-        return self.energy - self.energy[0] - self.work_reaction - self.work_forces
+
+        def since_first(x: np.ndarray) -> np.ndarray:
+            return x - x[0]
+
+        return since_first(self.energy) - since_first(self.work_reaction) - since_first(self.work_forces)
 
     def max_residual(self) -> float:
         """Largest ``|Φ|`` and ``|g|`` over the trajectory."""

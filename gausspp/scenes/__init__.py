@@ -1,20 +1,30 @@
 """Reference problems (DESIGN §6): ``get(name, **params)`` builds one, ``names()`` lists them.
 
-Each scene builds only what it needs: no λ state, QP inequality rows or NLP unless asked.
+Each scene is a module with a ``build(**params) -> Scene`` function, imported only when asked
+for: each scene builds only what it needs (no λ state, QP inequality rows or NLP unless asked).
 """
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from typing import Any
 
 from ..errors import InputError, UnknownNameError
-from . import rigid_body_servo, two_masses
 from ._scene import Scene
 
-_BUILDERS: dict[str, Callable[..., Scene]] = {
-    "two-masses": two_masses.build,
-    "rigid-body-servo": rigid_body_servo.build,
+#: scene name → module in this package
+_MODULES: dict[str, str] = {
+    "two-masses": "two_masses",
+    "rigid-body-servo": "rigid_body_servo",
+    "gyrostat": "gyrostat",
+    "gyrostat-extended": "gyrostat_extended",
+    "skate": "skate",
+    "crane": "crane",
+    "mixed-proportional": "mixed",
+    "mixed-rate": "mixed",
+    "stiff-chain": "stiff_chain",
+    "pendulum": "pendulum",
 }
 
 __all__ = ["Scene", "describe", "get", "names"]
@@ -22,19 +32,25 @@ __all__ = ["Scene", "describe", "get", "names"]
 
 def names() -> list[str]:
     """Names of every scene."""
-    return list(_BUILDERS)
+    return list(_MODULES)
+
+
+def _builder(name: str) -> Callable[..., Scene]:
+    module = importlib.import_module(f"{__name__}.{_MODULES[name]}")
+    builder: Callable[..., Scene] = getattr(module, "build_" + name.replace("-", "_"), None) or module.build
+    return builder
 
 
 def get(name: str, **params: Any) -> Scene:
     """Build the scene ``name`` with ``params`` (see each scene's ``build`` docstring)."""
-    if name not in _BUILDERS:
+    if name not in _MODULES:
         raise UnknownNameError(f"scene {name!r} is unknown; available: {names()}")
     try:
-        return _BUILDERS[name](**params)
+        return _builder(name)(**params)
     except TypeError as exc:
         raise InputError(f"scene {name!r}: {exc}") from None
 
 
 def describe() -> dict[str, str]:
-    """One line per scene."""
-    return {name: (build.__doc__ or "").strip().splitlines()[0] for name, build in _BUILDERS.items()}
+    """One line per scene (the first line of its builder's docstring)."""
+    return {name: (_builder(name).__doc__ or "").strip().splitlines()[0] for name in _MODULES}

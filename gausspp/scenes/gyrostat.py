@@ -1,0 +1,97 @@
+"""A rigid body kept on ``(ω, l) = 0`` by a flywheel: the gyrostat (paper §4, DESIGN §6.3).
+
+A symmetric rotor spins about the body axis ``n``; its axial angular momentum ``λ`` is a state
+(initial value required). The kinetic energy of the carrier is changed to
+``T* = ½ ωᵀIω + λ (n, ω)`` (eq. (14) with ``N = (n, ω)``), and the reaction is
+``R = −λ̇ N_v − λ [N] = −λ̇ n − λ ω × n`` (eq. (15)): Euler's equations of a gyrostat,
+
+    d/dt (Iω + λn) + ω × (Iω + λn) = 0,
+
+with ``λ̇`` chosen (by the motor) so that ``(ω, l) = 0`` holds. ``I`` is the inertia of the
+carrier with the rotor's transverse inertia, without the rotor's axial inertia ``J_r``; then
+``λ = J_r (n·ω + θ̇)`` with ``θ`` the rotor's angle (compare the scene
+``"gyrostat-extended"``, which carries ``θ`` as a coordinate). Realizable iff
+``(I⁻¹n, l) ≠ 0`` (condition (16)). With ``n = l`` the motion is vakonomic (eqs. (17)–(18)).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..constraints import Constraint
+from ..errors import InputError, ShapeError
+from ..frontends import RigidBody
+from ..model import Model
+from ..realizations import Inertial
+from ._scene import Scene
+
+
+def unit_vector(scene: str, name: str, value: Any) -> np.ndarray:
+    """``value`` as a unit 3-vector, or a clear error naming the scene and the parameter."""
+    vec = np.asarray(value, dtype=float).ravel()
+    if vec.shape != (3,):
+        raise ShapeError(f"{scene}: {name} must have 3 components, got {vec.size}")
+    norm = np.linalg.norm(vec)
+    if not np.isfinite(norm) or norm == 0:
+        raise InputError(f"{scene}: {name} must be a finite nonzero vector, got {vec.tolist()}")
+    return vec / norm
+
+
+def inertia_matrix(scene: str, inertia: Any) -> np.ndarray:
+    """A 3-vector of principal moments or a 3×3 tensor, as a 3×3 array (checked by the front end)."""
+    arr = np.asarray(inertia, dtype=float)
+    if arr.shape == (3,):
+        return np.diag(arr)
+    if arr.shape != (3, 3):
+        raise ShapeError(f"{scene}: inertia must be 3 principal moments or a 3×3 tensor, got shape {arr.shape}")
+    return arr
+
+
+def on_plane(omega0: Any, l: np.ndarray) -> np.ndarray:
+    """``omega0`` projected onto the plane ``(ω, l) = 0`` (``l`` a unit vector)."""
+    w0 = np.asarray(omega0, dtype=float).ravel()
+    if w0.shape != (3,):
+        raise ShapeError(f"omega0 must have 3 components, got {w0.size}")
+    return w0 - np.dot(w0, l) * l
+
+
+def build(
+    inertia: Any = (1.0, 2.0, 3.0),
+    n: Any = (0.0, 0.0, 1.0),
+    l: Any = (1.0, 1.0, 1.0),
+    omega0: Any = (1.0, -0.5, 0.2),
+    lam0: float = 0.5,
+    t_end: float = 10.0,
+) -> Scene:
+    """Gyrostat: a rotor on body axis ``n`` keeps ``(ω, l) = 0`` (flywheel realization); ``n=None`` means ``n = l``.
+
+    ``inertia`` (3 principal moments or a 3×3 tensor) includes the rotor's transverse inertia but
+    not its axial one; ``lam0`` is the rotor's initial axial angular momentum ``λ``; ``omega0``
+    is projected onto the plane ``(ω, l) = 0``. Realizable iff ``(I⁻¹n, l) ≠ 0`` (16).
+    """
+    I = inertia_matrix("gyrostat", inertia)
+    l_ = unit_vector("gyrostat", "l", l)
+    n_ = l_ if n is None else unit_vector("gyrostat", "n", n)
+    lam = np.atleast_1d(np.asarray(lam0, dtype=float)).ravel()
+    if lam.shape != (1,):
+        raise ShapeError(f"gyrostat: lam0 is the rotor's angular momentum, one number; got {lam.size} entries")
+    body = RigidBody(inertia=I)
+    rotor = Inertial(N=lambda q, w, t: ca.dot(ca.DM(n_), w), lam0=lam)
+    model = Model(body, [Constraint(lambda q, w, t: ca.dot(w, ca.DM(l_)), name="(ω, l) = 0", realization=rotor)])
+    vakonomic = bool(np.allclose(n_, l_, rtol=0.0, atol=1e-15))
+    return Scene(
+        name="gyrostat",
+        model=model,
+        q0=np.array([1.0, 0.0, 0.0, 0.0]),
+        v0=on_plane(omega0, l_),
+        lam0=lam,
+        t_end=t_end,
+        exact=None,
+        description="gyrostat: a rotor on axis n keeps (ω, l) = 0 (flywheel realization); n = l is vakonomic; paper §4",
+        params=dict(
+            inertia=I.tolist(), n=n_.tolist(), l=l_.tolist(), lam0=float(lam[0]), vakonomic=vakonomic, t_end=t_end
+        ),
+    )

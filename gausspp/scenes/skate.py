@@ -1,0 +1,105 @@
+"""A skate (knife edge) in the plane (DESIGN §6.4): one constraint, two laws of motion.
+
+Coordinates ``q = (x, y, θ)``: the contact point and the blade's heading. Kinetic energy
+``T = ½ m (ẋ² + ẏ²) + ½ J θ̇²``; the blade cannot slide sideways:
+
+    Φ = −sin θ · ẋ + cos θ · ẏ = 0.
+
+* ``realization="nonholonomic"`` — the ideal (d'Alembert–Lagrange) constraint: the reaction is
+  ``λ (−sin θ, cos θ, 0)``, a sideways force on the blade. The heading turns uniformly
+  (``θ̇ = ω₀``) and the speed along the blade stays ``u₀``: the contact point runs along a circle
+  of radius ``u₀/ω₀`` (a straight line if ``ω₀ = 0``). This is the :attr:`Scene.exact` motion.
+* ``realization="vakonomic"`` — the same constraint as a vakonomic one (paper (17)–(18)):
+  ``λ`` is a state with ``λ(0) = lam0``, the reaction ``−λ̇ N_v − λ [N]`` with ``N = Φ``. Along a
+  motion ``m u̇ = λ θ̇``, ``λ̇ = −m θ̇ u`` and ``J θ̈ = −λ u`` (``u`` the speed along the blade), so
+  the heading does not turn uniformly (even for ``lam0 = 0``: ``λ̇ = −m ω₀ u₀``); both laws agree
+  only on straight lines (``omega0 = 0, lam0 = 0``) and spins in place. Conserved: ``T`` and the
+  momentum ``p = m (ẋ, ẏ) + λ ∂Φ/∂(ẋ, ẏ)``, i.e. ``p_x + i p_y = (m u + iλ) e^{iθ} = |p| e^{iα}``
+  (Noether, translations). Hence ``m u = |p| cos(α − θ)``, ``λ = |p| sin(α − θ)`` and
+  ``J θ̈ = −(|p|²/2m) sin 2(α − θ)``, a pendulum equation; no closed form is given.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import casadi as ca
+import numpy as np
+
+from ..constraints import Constraint
+from ..errors import InputError, UnknownNameError
+from ..frontends import Lagrangian
+from ..model import Model
+from ..realizations import Ideal, Vakonomic
+from ._scene import Scene
+
+REALIZATIONS = ("nonholonomic", "vakonomic")
+
+
+def exact_nonholonomic(q0: np.ndarray, speed: float, omega: float) -> Callable[[float], tuple[np.ndarray, np.ndarray]]:
+    """The nonholonomic skate's motion from ``q0`` with speed ``speed`` along the blade and ``θ̇ = omega``."""
+    x0, y0, th0 = (float(c) for c in q0)
+
+    def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
+        th = th0 + omega * t
+        if omega == 0.0:
+            x, y = x0 + speed * np.cos(th0) * t, y0 + speed * np.sin(th0) * t
+        else:
+            r = speed / omega
+            x, y = x0 + r * (np.sin(th) - np.sin(th0)), y0 - r * (np.cos(th) - np.cos(th0))
+        q = np.array([x, y, th])
+        v = np.array([speed * np.cos(th), speed * np.sin(th), omega])
+        return q, v
+
+    return exact
+
+
+def build(
+    m: float = 1.0,
+    J: float = 0.1,
+    realization: str = "nonholonomic",
+    v0: float = 1.0,
+    omega0: float = 1.0,
+    theta0: float = 0.0,
+    lam0: float = 0.5,
+    t_end: float = 5.0,
+) -> Scene:
+    """Skate (knife edge) in the plane, no sideways velocity; nonholonomic (ideal) or vakonomic law.
+
+    ``v0`` is the initial speed along the blade, ``omega0`` the initial turning rate ``θ̇``,
+    ``theta0`` the initial heading (the skate starts at the origin); ``lam0`` is the vakonomic
+    multiplier's initial value (ignored by the nonholonomic law; nonzero by default so that the
+    two laws differ).
+    """
+    if realization not in REALIZATIONS:
+        raise UnknownNameError(f"skate: realization={realization!r} is unknown; use one of {list(REALIZATIONS)}")
+    if not (m > 0 and J > 0):
+        raise InputError(f"skate: mass and moment of inertia must be positive, got m={m}, J={J}")
+    for name, value in (("v0", v0), ("omega0", omega0), ("theta0", theta0), ("lam0", lam0), ("t_end", t_end)):
+        if not np.isfinite(value):
+            raise InputError(f"skate: {name} must be finite, got {value}")
+    body = Lagrangian(
+        n=3,
+        T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2) + 0.5 * J * v[2] ** 2,
+    )
+    vakonomic = realization == "vakonomic"
+    real = Vakonomic(lam0=[lam0]) if vakonomic else Ideal()
+    blade = Constraint(
+        lambda q, v, t: -ca.sin(q[2]) * v[0] + ca.cos(q[2]) * v[1],
+        name="no sideways slip",
+        realization=real,
+    )
+    model = Model(body, [blade])
+    q0 = np.array([0.0, 0.0, float(theta0)])
+    qd0 = np.array([v0 * np.cos(theta0), v0 * np.sin(theta0), float(omega0)])
+    return Scene(
+        name="skate",
+        model=model,
+        q0=q0,
+        v0=qd0,
+        lam0=np.array([float(lam0)]) if vakonomic else None,
+        t_end=float(t_end),
+        exact=None if vakonomic else exact_nonholonomic(q0, float(v0), float(omega0)),
+        description="skate (knife edge) in the plane, no sideways slip: nonholonomic or vakonomic law",
+        params=dict(m=m, J=J, realization=realization, v0=v0, omega0=omega0, theta0=theta0, lam0=lam0, t_end=t_end),
+    )
