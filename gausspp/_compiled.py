@@ -76,9 +76,11 @@ def _rk_step(model: Model, F: ca.Function, tableau: _methods.Tableau, stab: Stab
     y1 = ca.vertcat(q1, v1, lam1, y1[nq + nv + nl :])
     step = ca.Function("rk_step", [y, t, h, s], [y1])
     try:
-        return step.expand()  # direct path: one flat SX instruction list for the whole step
+        flat = step.expand()  # direct path: one flat SX instruction list for the whole step ...
     except RuntimeError:
         return step  # a conic node cannot be expanded; the QP stays a call in the MX graph
+    args = flat.sx_in()
+    return ca.Function("rk_step", args, ca.cse(flat.call(args)))  # ... without repeated subexpressions
 
 
 def _normalize(model: Model, q: ca.MX) -> ca.MX:
@@ -99,8 +101,8 @@ def integrate_compiled(
     rtol: float,
     atol: float,
     record: Any,
-) -> tuple[np.ndarray, np.ndarray, int, Exception | None]:
-    """Run a compiled-lane method; return ``(t, Y, steps, failure)`` on the recorded grid."""
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int]:
+    """Run a compiled-lane method; return ``(t, Y, steps, failure, rhs evaluations)`` on the recorded grid."""
     F = rhs_function(model, solver, backend)
     if meth.name == "cvodes":
         return _cvodes(model, F, solver, stab, t0, t_end, dt, y0, rtol, atol, record)
@@ -122,7 +124,8 @@ def integrate_compiled(
         Y, times = Y[:first], times[:first]
         failure = _diagnose(model, solver, backend, times[-1], Y[-1], times[-1] + dt)
     keep = _record_indices(times.size - 1, record) if np.isscalar(record) else _on_grid(times, record)
-    return times[keep], Y[keep], times.size - 1, failure
+    steps = times.size - 1
+    return times[keep], Y[keep], steps, failure, steps * len(meth.tableau.c)
 
 
 def _step_by_step(step: ca.Function, y0: np.ndarray, times: np.ndarray, stab: np.ndarray) -> np.ndarray:
@@ -178,7 +181,7 @@ def _cvodes(
     rtol: float,
     atol: float,
     record: Any,
-) -> tuple[np.ndarray, np.ndarray, int, Exception | None]:
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int]:
     if solver != "direct":
         raise InputError("method='cvodes' needs solver='direct': CVODES differentiates the right-hand side")
     if stab.project:
@@ -200,5 +203,6 @@ def _cvodes(
         raise GaussppError(f"CVODES failed between t={t0:.6g} and t={t_end:.6g}: {str(exc).splitlines()[-1]}") from None
     stats = integrator.stats()
     steps = int(stats.get("nsteps", 0)) if isinstance(stats, dict) else 0
+    evaluations = int(stats.get("nfevals", 0)) if isinstance(stats, dict) else 0
     Y = np.vstack([y0[None, :], xf])
-    return grid, Y, steps, None
+    return grid, Y, steps, None, evaluations

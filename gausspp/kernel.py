@@ -121,7 +121,7 @@ Kernel = CompiledKernel | PythonQPKernel
 def _dense(exprs: list[ca.SX]) -> list[ca.SX]:
     """Outputs with every entry stored: buffers are sized by stored entries, and a structural
     zero (say, a residual casadi proves to vanish) must still come out as a number."""
-    return [ca.densify(e) for e in exprs]
+    return ca.cse([ca.densify(e) for e in exprs])  # and each common subexpression computed once
 
 
 def _guard(build: ca.Function) -> ca.Function:

@@ -102,6 +102,7 @@ def simulate(
     y0 = np.concatenate([q, v, lam, [0.0, 0.0]])
     label = "direct" if solver == "direct" else qp.get(backend).name
     failure: Exception | None = None
+    compiled_evaluations = None
     try:
         if meth.lane == "python":
             assert dt is not None  # checked above for fixed-step methods
@@ -111,12 +112,12 @@ def simulate(
         else:
             from ._compiled import integrate_compiled
 
-            ts, ys, steps, failure = integrate_compiled(
+            ts, ys, steps, failure, compiled_evaluations = integrate_compiled(
                 meth, model, solver, backend, stab, t0, t_end, dt, y0, rtol, atol, record
             )
     except GaussppError as exc:  # failed before the first step could be kept
         failure, ts, ys, steps = exc, np.array([t0]), y0[None, :], 0
-    evaluations = rhs.evaluations
+    evaluations = rhs.evaluations if compiled_evaluations is None else compiled_evaluations
     traj, record_failure = _record(model, rhs, ts, ys, meth, label, steps, failure)
     traj = replace(traj, rhs_evaluations=evaluations)
     failure = failure or record_failure
