@@ -55,3 +55,15 @@ def test_scenes_listing(capsys: pytest.CaptureFixture[str]) -> None:
 def test_cli_bad_usage_exits_2() -> None:
     result = subprocess.run([sys.executable, "-m", "gausspp.cli", "nonsense"], capture_output=True, text=True)
     assert result.returncode == 2 and "invalid choice" in result.stderr
+
+
+def test_readme_simulation_snippet_runs() -> None:
+    import gausspp as gp
+
+    text = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
+    assert len(blocks) >= 2
+    namespace: dict[str, object] = {"gp": gp}
+    exec(compile(blocks[1], "README.md", "exec"), namespace)
+    traj = namespace["traj"]
+    assert traj.success and abs(traj.energy_balance()).max() < 1e-11  # type: ignore[attr-defined]
