@@ -27,6 +27,7 @@ from .errors import (
     UnknownNameError,
 )
 from .frontends import Lagrangian, MassMatrix, Mechanism, RigidBody
+from .integral import Verification, verify
 from .model import Model
 from .problem import StepProblem, solve
 from .realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
@@ -67,10 +68,12 @@ __all__ = [
     "Trajectory",
     "UnknownNameError",
     "Vakonomic",
+    "Verification",
     "methods",
     "qp",
     "realizability",
     "scenes",
     "simulate",
     "solve",
+    "verify",
 ]

@@ -63,6 +63,10 @@ class Mechanism(ABC):
         """:meth:`normalize` on numbers."""
         return q
 
+    def variation_matrix(self) -> ca.SX:
+        """``C`` in ``δv = η̇ + C η`` for a variation ``η`` of a path (zero for generalized coordinates)."""
+        return ca.SX.zeros(self.nv, self.nv)
+
     @property
     def nq(self) -> int:
         """Number of configuration coordinates."""
@@ -279,6 +283,15 @@ class RigidBody(Mechanism):
     def normalize_array(self, q: np.ndarray) -> np.ndarray:
         """Unit quaternion: ``q / |q|``."""
         return q / np.linalg.norm(q)
+
+    def variation_matrix(self) -> ca.SX:
+        """``δω = η̇ + ω × η`` for an angular variation ``η`` in body axes."""
+        w = self.v
+        return ca.vertcat(
+            ca.horzcat(0, -w[2], w[1]),
+            ca.horzcat(w[2], 0, -w[0]),
+            ca.horzcat(-w[1], w[0], 0),
+        )
 
     def lagrange_rows(self, N: ca.SX) -> ca.SX:
         """Euler–Poincaré derivative ``[N_i] = d/dt ∂N_i/∂ω + ω × ∂N_i/∂ω``.

@@ -55,6 +55,19 @@ class Reaction:
     r0: ca.SX
 
 
+@dataclass(frozen=True)
+class VirtualDisplacements:
+    """The realization's virtual displacements along a path, eq. (20): ``E1 η̇ + E0 η = 0``.
+
+    ``η`` is a variation in velocity space (``δq = K η``, ``δv = η̇ + C η``, see
+    :meth:`Mechanism.variation_matrix`). ``E1`` is ``None`` when the relation holds pointwise
+    (``N = 0``: ``E0 η = 0`` at each instant).
+    """
+
+    E1: ca.SX | None
+    E0: ca.SX
+
+
 class Realization(ABC):
     """How a constraint is kept. Subclasses fulfil this contract:
 
@@ -62,7 +75,9 @@ class Realization(ABC):
        (then ``lam0`` holds its initial value, or ``None`` if the user gives it later);
     2. :meth:`reaction` — given the mechanism, the constraint's expressions and the
        symbol ``lam`` (size ``k`` when ``has_state``, else size 0), return ``D`` and ``r₀``;
-    3. ``label`` — a short name for tables.
+    3. :meth:`virtual_displacements` — the relation (20) that defines its virtual
+       displacements along a path with acceleration ``a`` (used by :func:`gausspp.verify`);
+    4. ``label`` — a short name for tables.
     """
 
     has_state: bool = False
@@ -75,8 +90,19 @@ class Realization(ABC):
     def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
         """The reaction's directions ``D`` and known part ``r₀`` for one constraint."""
 
+    @abstractmethod
+    def virtual_displacements(self, mech: Mechanism, c: ConstraintExpressions, a: ca.SX) -> VirtualDisplacements:
+        """Eq. (20) for this realization: ``E1 η̇ + E0 η = 0`` (``a`` is the path's acceleration)."""
+
     def __repr__(self) -> str:
         return f"{type(self).__name__}()"
+
+
+def _variation_of(N: ca.SX, mech: Mechanism) -> tuple[ca.SX, ca.SX]:
+    """``δN = N_v η̇ + (N_v C + N_q K) η`` for ``N`` affine in ``v``: returns ``(N_v, N_v C + N_q K)``."""
+    Nv = ca.jacobian(N, mech.v)
+    K = ca.jacobian(mech.qdot, mech.v)
+    return Nv, Nv @ mech.variation_matrix() + ca.jacobian(N, mech.q) @ K
 
 
 class Ideal(Realization):
@@ -87,6 +113,9 @@ class Ideal(Realization):
 
     def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
         return Reaction(D=c.J.T, r0=ca.SX.zeros(mech.nv))
+
+    def virtual_displacements(self, mech: Mechanism, c: ConstraintExpressions, a: ca.SX) -> VirtualDisplacements:
+        return VirtualDisplacements(E1=None, E0=c.J)
 
 
 def _matrix(fn: Callable[..., Any], mech: Mechanism, k: int, what: str) -> ca.SX:
@@ -126,6 +155,9 @@ class Force(Realization):
         M = _matrix(self.M, mech, c.J.shape[0], "Force: M(q, v, t)")
         return Reaction(D=M.T, r0=ca.SX.zeros(mech.nv))
 
+    def virtual_displacements(self, mech: Mechanism, c: ConstraintExpressions, a: ca.SX) -> VirtualDisplacements:
+        return VirtualDisplacements(E1=None, E0=_matrix(self.M, mech, c.J.shape[0], "Force: M(q, v, t)"))
+
 
 class Inertial(Realization):
     """Inertial (flywheel) realization (eqs. (14)–(15)): ``T* = T + λ N``.
@@ -158,6 +190,10 @@ class Inertial(Realization):
     def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
         N = self._N(mech, c)
         return Reaction(D=-ca.jacobian(N, mech.v).T, r0=-mech.lagrange_rows(N).T @ lam)
+
+    def virtual_displacements(self, mech: Mechanism, c: ConstraintExpressions, a: ca.SX) -> VirtualDisplacements:
+        E1, E0 = _variation_of(self._N(mech, c), mech)  # δN = 0
+        return VirtualDisplacements(E1=E1, E0=E0)
 
 
 class Vakonomic(Inertial):
@@ -220,6 +256,23 @@ class Mixed(Realization):
         if self.law == "proportional":
             return Reaction(D=D, r0=inertial + M.T @ lam)
         return Reaction(D=D + M.T, r0=inertial)
+
+    def virtual_displacements(self, mech: Mechanism, c: ConstraintExpressions, a: ca.SX) -> VirtualDisplacements:
+        k = c.J.shape[0]
+        N = evaluate(self.N, (mech.q, mech.v, mech.t), (k, 1), "Mixed: N(q, v, t)")
+        M = _matrix(self.M, mech, k, "Mixed: M(q, v, t)")
+        E1, E0 = _variation_of(N, mech)
+        if self.law == "proportional":  # (20): δN + M η = 0
+            return VirtualDisplacements(E1=E1, E0=E0 + M)
+        # (22): δN − (M η)˙ = 0, with Ṁ along the path
+        rows = [
+            ca.jacobian(M[i, :].T, mech.q) @ mech.qdot
+            + ca.jacobian(M[i, :].T, mech.v) @ a
+            + ca.jacobian(M[i, :].T, mech.t)
+            for i in range(k)
+        ]
+        M_dot = ca.horzcat(*rows).T
+        return VirtualDisplacements(E1=E1 - M, E0=E0 - M_dot)
 
     def __repr__(self) -> str:
         return f"Mixed(law={self.law!r})"

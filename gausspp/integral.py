@@ -1,0 +1,387 @@
+"""The integral principle (paper §6, inequality (23); DESIGN §4): is a path a motion of a model?
+
+For a path ``x(t)`` on the constraint put ``R(t) = [T] − F = A ẍ − f`` along it. The path is a
+motion of the model iff, for every variation ``η`` vanishing at ``t₁, t₂`` and satisfying the
+realization's relation (20) ``E1 η̇ + E0 η = 0``,
+
+    (1/T) ∫ (G⁻¹(R + Gη), R + Gη) dt  ≥  (1/T) ∫ (G⁻¹R, R) dt            (23)
+
+for any positive definite ``G`` (the paper's ``A``). The left side minus the right is
+``(1/T) ∫ 2(R, η) + (Gη, η) dt``: its minimum over admissible ``η`` is ``−gap ≤ 0``, and
+``gap = 0`` exactly when ``R`` does no work on any admissible variation (21).
+
+Discretization: ``η`` at the path's nodes with ``η = 0`` at both ends; the integral by the
+trapezoid rule; a pointwise relation (``N = 0``: ideal and force realizations) at each interior
+node; a differential one (``N ≠ 0``) by the midpoint rule on each interval — second order, so
+for a true motion the relative gap falls like ``h⁴`` (pointwise relations: like the error of
+the path's acceleration, squared), while a path of another realization keeps a gap of order
+one. The result is a sparse convex QP posed with casadi's ``conic`` interface. For pointwise
+relations it decouples in time and has a closed form, a second path that cross-checks the QP.
+
+The multipliers of the discrete (20) reproduce ``λ(t)``: ``λ = −μ/w`` at nodes (trapezoid
+weight ``w``) and ``λ = −ν/h`` at interval midpoints.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import scipy.sparse as sp
+from scipy.interpolate import CubicSpline
+
+from .errors import InitialDataError, InputError, NonFiniteError, QPSolveError, ShapeError
+from .model import Model
+
+#: Relative gap below which a path counts as a motion whatever the refinement says (round-off).
+GAP_FLOOR = 1e-8
+
+
+@dataclass(frozen=True)
+class Verification:
+    """What :func:`verify` found.
+
+    Attributes
+    ----------
+    t : (N+1,) array
+        Nodes of the discretization.
+    value_at_zero : float
+        ``(1/T) ∫ (G⁻¹R, R) dt``, the right side of (23).
+    minimum : float
+        The minimum of the left side of (23) over admissible variations.
+    gap, relative_gap : float
+        ``value_at_zero − minimum ≥ 0`` and ``gap / value_at_zero``.
+    coarse_relative_gap : float
+        The relative gap on every other node: a motion's gap falls under refinement, a
+        non-motion's does not.
+    tolerance : float
+        The relative gap below which ``is_motion`` holds: ``max(GAP_FLOOR, coarse_relative_gap/8)``.
+    is_motion : bool
+    delta_x : (N+1, nv) array
+        The minimizing variation: where and how the path fails.
+    multipliers : (N+1, k) array
+        ``λ`` recovered from the discrete (20), at the nodes (NaN where undefined: the ends of
+        pointwise rows).
+    method : str
+    """
+
+    t: np.ndarray
+    value_at_zero: float
+    minimum: float
+    gap: float
+    relative_gap: float
+    coarse_relative_gap: float
+    tolerance: float
+    is_motion: bool
+    delta_x: np.ndarray
+    multipliers: np.ndarray
+    method: str
+
+
+@dataclass(frozen=True)
+class Discretized:
+    """(23) on nodes: ``R``, metric ``G`` and the relation (20) per constraint row.
+
+    ``E1``/``E0`` are ``(N+1, k, n)``; rows with ``pointwise[r]`` true have ``E1 = 0`` and hold
+    at each interior node, the others on each interval by the midpoint rule.
+    """
+
+    t: np.ndarray
+    R: np.ndarray
+    G: np.ndarray
+    E1: np.ndarray
+    E0: np.ndarray
+    pointwise: np.ndarray
+
+    def every_other(self) -> Discretized:
+        idx = np.arange(0, self.t.size, 2)
+        if idx[-1] != self.t.size - 1:
+            idx = np.append(idx, self.t.size - 1)
+        return Discretized(self.t[idx], self.R[idx], self.G[idx], self.E1[idx], self.E0[idx], self.pointwise)
+
+
+# -- model side: the data of (23) along a path --------------------------------------------------
+@functools.lru_cache(maxsize=32)
+def _data_function(model: Model) -> ca.Function:
+    mech = model.mechanism
+    a = ca.SX.sym("a", mech.nv)
+    E1s, E0s, pointwise = [], [], []
+    for c in model.constraints:
+        rel = c.realization.virtual_displacements(mech, c.expressions(mech), a)
+        k = rel.E0.shape[0]
+        E1s.append(rel.E1 if rel.E1 is not None else ca.SX.zeros(k, mech.nv))
+        E0s.append(rel.E0)
+        pointwise += [rel.E1 is None] * k
+    p = model._expressions
+    assert p.g is not None  # a model's step always carries its holonomic residuals
+    R = p.A @ a - p.f
+    fn = ca.Function(
+        "integral_data",
+        [mech.t, mech.q, mech.v, a],
+        [R, p.A, ca.vertcat(*E1s), ca.vertcat(*E0s), p.Phi, p.g],
+    )
+    fn.pointwise = np.array(pointwise)  # type: ignore[attr-defined]
+    return fn
+
+
+def _path(trajectory: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+    get = trajectory.get if isinstance(trajectory, Mapping) else lambda k, d=None: getattr(trajectory, k, d)
+    try:
+        t, q, v = (np.asarray(get(k), dtype=float) for k in ("t", "q", "v"))
+    except (TypeError, ValueError):
+        raise InputError("the trajectory must provide numeric t, q and v (a Trajectory or a mapping)") from None
+    a = get("a", None)
+    return t, np.atleast_2d(q.T).T, np.atleast_2d(v.T).T, None if a is None else np.atleast_2d(np.asarray(a, float).T).T
+
+
+def discretize(
+    model: Model,
+    trajectory: Any,
+    *,
+    window: tuple[float, float] | None = None,
+    nodes: int | None = None,
+    metric: str | np.ndarray = "A",
+    acceleration: str = "path",
+    constraint_tol: float = 1e-6,
+) -> Discretized:
+    """Evaluate ``R``, the metric and (20) on the nodes of a path (checked)."""
+    t, q, v, a = _path(trajectory)
+    N = t.size
+    if q.shape != (N, model.nq) or v.shape != (N, model.nv):
+        raise ShapeError(
+            f"trajectory: q and v must be ({N}, {model.nq}) and ({N}, {model.nv}), got {q.shape}, {v.shape}"
+        )
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+        bad = int(np.flatnonzero(~(np.isfinite(q).all(1) & np.isfinite(v).all(1) & np.isfinite(t)))[0])
+        raise NonFiniteError(f"trajectory: sample {bad} (t={t[bad]:.6g}) is not finite; cut the window before it")
+    if N < 2 or np.any(np.diff(t) <= 0):
+        raise InputError("trajectory: t must be strictly increasing with at least 2 samples")
+    t1, t2 = (t[0], t[-1]) if window is None else (float(window[0]), float(window[1]))
+    if not (t[0] <= t1 < t2 <= t[-1]):
+        raise InputError(f"window ({t1:g}, {t2:g}) is outside the data [{t[0]:g}, {t[-1]:g}] or empty")
+    if acceleration not in ("path", "recorded"):
+        raise InputError(f"acceleration={acceleration!r} is unknown; use 'path' (from v(t)) or 'recorded'")
+    if acceleration == "recorded" and a is None:
+        raise InputError("acceleration='recorded' needs the trajectory's accelerations a")
+    recorded = a if a is not None else v  # (only read when acceleration == "recorded")
+    v_spline = CubicSpline(t, v, axis=0)
+    if nodes is None:
+        inside = (t >= t1 - 1e-12) & (t <= t2 + 1e-12)
+        tn, qn, vn = t[inside], q[inside], v[inside]
+        an = recorded[inside] if acceleration == "recorded" else v_spline(tn, 1)
+    else:
+        tn = np.linspace(t1, t2, int(nodes))
+        qn = np.array([model.mechanism.normalize_array(x) for x in CubicSpline(t, q, axis=0)(tn)])
+        vn = v_spline(tn)
+        an = CubicSpline(t, recorded, axis=0)(tn) if acceleration == "recorded" else v_spline(tn, 1)
+    if tn.size < 5:
+        raise InputError(
+            f"too few nodes in the window: {tn.size}; the discretization needs at least 5 (pass nodes=...)"
+        )
+    fn = _data_function(model)
+    out = fn.map(tn.size)(tn[None, :], qn.T, vn.T, an.T)
+    R, A, E1, E0, Phi, g = (np.array(x) for x in out)
+    n, k = model.nv, model.k
+    Phi, g = Phi.reshape(k, -1), g.reshape(k, -1)
+    worst = float(max(np.abs(Phi).max(), np.abs(g).max()))
+    if worst > constraint_tol:
+        i = int(np.argmax(np.abs(Phi).max(0) + np.abs(g).max(0)))
+        raise InitialDataError(
+            f"the path is off the constraint at t={tn[i]:.6g} (|Φ| or |g| = {worst:.3g} > {constraint_tol:g}); "
+            "(23) compares paths on the constraint: project the data or raise constraint_tol"
+        )
+    A = A.reshape(n, -1, n).transpose(1, 0, 2) if n > 1 else A.reshape(-1, 1, 1)
+    G = _metric(metric, A, n)
+    return Discretized(
+        t=tn,
+        R=R.reshape(n, -1).T,
+        G=G,
+        E1=E1.reshape(k, -1, n).transpose(1, 0, 2),
+        E0=E0.reshape(k, -1, n).transpose(1, 0, 2),
+        pointwise=fn.pointwise,  # type: ignore[attr-defined]
+    )
+
+
+def _metric(metric: str | np.ndarray, A: np.ndarray, n: int) -> np.ndarray:
+    if isinstance(metric, str):
+        if metric == "A":
+            return A
+        if metric == "identity":
+            return np.broadcast_to(np.eye(n), A.shape).copy()
+        raise InputError(f"metric={metric!r} is unknown; use 'A', 'identity' or an SPD (n, n) array")
+    G = np.asarray(metric, float)
+    if G.shape != (n, n) or not np.allclose(G, G.T) or np.linalg.eigvalsh(0.5 * (G + G.T)).min() <= 0:
+        raise InputError(f"metric must be a symmetric positive definite ({n}, {n}) array")
+    return np.broadcast_to(G, A.shape).copy()
+
+
+# -- the discrete problem ---------------------------------------------------------------------
+def _weights(t: np.ndarray) -> np.ndarray:
+    h = np.diff(t)
+    w = np.zeros(t.size)
+    w[:-1] += h / 2
+    w[1:] += h / 2
+    return w
+
+
+def value_at_zero(d: Discretized) -> float:
+    """``(1/T) ∫ (G⁻¹R, R) dt`` by the trapezoid rule."""
+    w = _weights(d.t)
+    quad = np.einsum("ni,ni->n", d.R, np.linalg.solve(d.G, d.R[..., None])[..., 0])
+    return float(w @ quad / (d.t[-1] - d.t[0]))
+
+
+def solve_qp(d: Discretized) -> tuple[float, np.ndarray, np.ndarray]:
+    """Minimize the left side of (23) over admissible ``η``: ``(minimum − value_at_zero, η, λ)``."""
+    N1, n = d.t.size, d.R.shape[1]
+    k = d.E0.shape[1]
+    m = N1 - 2  # interior nodes
+    w, h = _weights(d.t), np.diff(d.t)
+    H = sp.block_diag([w[i] * d.G[i] for i in range(1, N1 - 1)], format="csc")
+    g = np.concatenate([w[i] * d.R[i] for i in range(1, N1 - 1)])
+    row_kind: list[tuple[str, int, int]] = []  # ("node", i, r) or ("interval", j, r) per constraint row
+    blocks: list[sp.spmatrix] = []
+    point = np.flatnonzero(d.pointwise)
+    diff = np.flatnonzero(~d.pointwise)
+    if point.size:
+        for i in range(1, N1 - 1):
+            B = sp.lil_matrix((point.size, m * n))
+            B[:, (i - 1) * n : i * n] = d.E0[i][point]
+            blocks.append(B)
+            row_kind += [("node", i, int(r)) for r in point]
+    if diff.size:
+        for j in range(N1 - 1):
+            E1 = 0.5 * (d.E1[j][diff] + d.E1[j + 1][diff])
+            E0 = 0.5 * (d.E0[j][diff] + d.E0[j + 1][diff])
+            B = sp.lil_matrix((diff.size, m * n))
+            if j >= 1:
+                B[:, (j - 1) * n : j * n] = -E1 / h[j] + E0 / 2
+            if j + 1 <= N1 - 2:
+                B[:, j * n : (j + 1) * n] = E1 / h[j] + E0 / 2
+            blocks.append(B)
+            row_kind += [("interval", j, int(r)) for r in diff]
+    B = sp.vstack(blocks, format="csc") if blocks else sp.csc_matrix((0, m * n))
+    x, y = _conic(H, g, B)
+    eta = np.zeros((N1, n))
+    eta[1:-1] = x.reshape(m, n)
+    value = float(g @ x + 0.5 * x @ (H @ x))  # Σ w (Rη + ½ηGη)
+    lam = np.full((N1, k), np.nan)
+    mids = np.full((N1 - 1, k), np.nan)
+    for (kind, i, r), yi in zip(row_kind, y, strict=True):
+        if kind == "node":
+            lam[i, r] = -yi / w[i]
+        else:
+            mids[i, r] = -yi / h[i]
+    if diff.size:  # midpoints → nodes: average inside, extrapolate at the ends
+        lam[1:-1, diff] = 0.5 * (mids[:-1, diff] + mids[1:, diff])
+        lam[0, diff] = 1.5 * mids[0, diff] - 0.5 * mids[1, diff]
+        lam[-1, diff] = 1.5 * mids[-1, diff] - 0.5 * mids[-2, diff]
+    return 2.0 * value / (d.t[-1] - d.t[0]), eta, lam
+
+
+def _conic(H: sp.spmatrix, g: np.ndarray, B: sp.spmatrix) -> tuple[np.ndarray, np.ndarray]:
+    """The equality-constrained convex QP through casadi's conic interface (sparse QR, qrqp)."""
+    Hd, Bd = ca.DM(H), ca.DM(B)
+    solver = ca.conic(
+        "integral_qp",
+        "qrqp",
+        {"h": Hd.sparsity(), "a": Bd.sparsity()},
+        {"print_iter": False, "print_header": False, "print_info": False, "error_on_fail": False},
+    )
+    zero = np.zeros(B.shape[0])
+    sol = solver(h=Hd, g=g, a=Bd, lba=zero, uba=zero)
+    x, y = np.array(sol["x"]).ravel(), np.array(sol["lam_a"]).ravel()
+    if not np.all(np.isfinite(x)) or np.abs(B @ x).max(initial=0.0) > 1e-8 * (1 + np.abs(x).max(initial=0.0)):
+        raise QPSolveError(f"the discretized (23) was not solved: {solver.stats().get('return_status')!r}")
+    return x, y
+
+
+def solve_closed_form(d: Discretized) -> tuple[float, np.ndarray, np.ndarray]:
+    """Pointwise relations only: at each interior node minimize over ``ker E0``: ``η = −G⁻¹(R − E0ᵀμ)``."""
+    if not d.pointwise.all():
+        raise InputError("the closed form needs pointwise relations (N = 0); use method='qp'")
+    N1, n = d.R.shape
+    w = _weights(d.t)
+    eta = np.zeros((N1, n))
+    lam = np.full((N1, d.E0.shape[1]), np.nan)
+    total = 0.0
+    for i in range(1, N1 - 1):
+        G, R, E = d.G[i], d.R[i], d.E0[i]
+        GiE = np.linalg.solve(G, E.T)
+        mu = np.linalg.lstsq(E @ GiE, E @ np.linalg.solve(G, R), rcond=None)[0]
+        perp = R - E.T @ mu
+        eta[i] = -np.linalg.solve(G, perp)
+        lam[i] = mu
+        total -= w[i] * perp @ np.linalg.solve(G, perp)
+    return total / (d.t[-1] - d.t[0]), eta, lam
+
+
+def verify(
+    model: Model,
+    trajectory: Any,
+    *,
+    window: tuple[float, float] | None = None,
+    nodes: int | None = None,
+    metric: str | np.ndarray = "A",
+    method: str = "qp",
+    acceleration: str = "path",
+    constraint_tol: float = 1e-6,
+) -> Verification:
+    """Decide by inequality (23) whether ``trajectory`` is a motion of ``model``.
+
+    Parameters
+    ----------
+    model : Model
+        The model (with its realizations) to test the path against.
+    trajectory : Trajectory or mapping
+        Anything with ``t (N,)``, ``q (N, nq)``, ``v (N, nv)`` and optionally ``a (N, nv)``: a
+        result of :func:`simulate` or data from elsewhere.
+    window : (t1, t2), optional
+        Part of the data to use (default: all).
+    nodes : int, optional
+        Resample the window at this many uniform nodes (cubic splines); default: the samples.
+    metric : "A", "identity" or an SPD (nv, nv) array
+        The matrix of (23); any positive definite one gives the same verdict.
+    method : {"qp", "closed-form"}
+        The sparse QP (any realization), or the pointwise closed form (``N = 0`` only).
+    acceleration : {"path", "recorded"}
+        ``ẍ`` from the path's velocities (cubic spline; the honest check) or the trajectory's
+        recorded accelerations (measured data).
+    """
+    if method not in ("qp", "closed-form"):
+        raise InputError(f"method={method!r} is unknown; use 'qp' or 'closed-form'")
+    d = discretize(
+        model,
+        trajectory,
+        window=window,
+        nodes=nodes,
+        metric=metric,
+        acceleration=acceleration,
+        constraint_tol=constraint_tol,
+    )
+    solve = solve_qp if method == "qp" else solve_closed_form
+    difference, eta, lam = solve(d)
+    zero = value_at_zero(d)
+    gap = max(-difference, 0.0)
+    coarse = d.every_other()
+    coarse_gap = max(-solve(coarse)[0], 0.0) if coarse.t.size >= 5 else np.nan
+    rel = gap / zero if zero > 0 else 0.0
+    coarse_rel = coarse_gap / value_at_zero(coarse) if zero > 0 else 0.0
+    tol = max(GAP_FLOOR, coarse_rel / 8) if np.isfinite(coarse_rel) else GAP_FLOOR
+    return Verification(
+        t=d.t,
+        value_at_zero=zero,
+        minimum=zero - gap,
+        gap=gap,
+        relative_gap=rel,
+        coarse_relative_gap=coarse_rel,
+        tolerance=tol,
+        is_motion=rel <= tol,
+        delta_x=eta,
+        multipliers=lam,
+        method=method,
+    )
