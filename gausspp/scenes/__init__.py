@@ -25,6 +25,7 @@ _MODULES: dict[str, str] = {
     "mixed-rate": "mixed",
     "stiff-chain": "stiff_chain",
     "pendulum": "pendulum",
+    "andrews": "andrews",
 }
 
 __all__ = ["Scene", "describe", "get", "names"]
