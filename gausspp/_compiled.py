@@ -123,7 +123,11 @@ def integrate_compiled(
         first = int(np.argmin(finite)) if not finite.all() else Y.shape[0]
         Y, times = Y[:first], times[:first]
         failure = _diagnose(model, solver, backend, times[-1], Y[-1], times[-1] + dt)
-    keep = _record_indices(times.size - 1, record) if np.isscalar(record) else _on_grid(times, record)
+    if np.isscalar(record):
+        keep = _record_indices(times.size - 1, record)
+    else:  # after a failure only the requested times that were reached can be kept
+        wanted = np.asarray(record, float)
+        keep = _on_grid(times, wanted[wanted <= times[-1] + 1e-12] if failure else wanted)
     steps = times.size - 1
     return times[keep], Y[keep], steps, failure, steps * len(meth.tableau.c)
 

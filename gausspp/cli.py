@@ -7,6 +7,7 @@ Errors print as one line (the traceback only with ``--debug``); exit codes: 0 su
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from collections.abc import Sequence
@@ -73,6 +74,49 @@ def demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def report(args: argparse.Namespace) -> int:
+    """Work-precision study (or, with --stability, the stability study): table, CSV/JSON, plots."""
+    from pathlib import Path
+
+    from . import report as study
+
+    out = Path(args.out)
+    if args.stability:
+        from . import stability
+
+        cases = stability.run(quick=not args.full)
+        print(stability.table(cases))
+        out.mkdir(parents=True, exist_ok=True)
+        (out / "stability.json").write_text(json.dumps(stability.to_records(cases), indent=1, default=str))
+        print(f"\nwritten: {out / 'stability.json'}")
+        return 0 if all(c.verdict for c in cases) else 1
+    start = time.perf_counter()
+    rows = study.work_precision(
+        args.scenes or None,
+        quick=not args.full,
+        repeats=args.repeats,
+        progress=(lambda m: print(f"  … {m}", file=sys.stderr)) if args.verbose else None,
+    )
+    print(study.table(rows))
+    print("\nFastest run reaching a final-state error ≤ 1e-10, per scene:")
+    for scene, row in study.best_per_scene(rows).items():
+        shown = (
+            "none"
+            if row is None
+            else f"{row.method} · {row.solver} · {row.setting}: {row.final_error:.1e} in {row.wall_time:.4f} s"
+        )
+        print(f"  {scene:20s} {shown}")
+    files = study.write(rows, out)
+    try:
+        from . import plot
+
+        files += plot.save_work_precision(rows, out)
+    except GaussppError as exc:  # matplotlib missing: the table and data are still written
+        print(f"(no plots: {exc})")
+    print(f"\n{len(rows)} runs in {time.perf_counter() - start:.1f} s; written: {', '.join(str(f) for f in files)}")
+    return 0
+
+
 def list_scenes(args: argparse.Namespace) -> int:
     """Print every scene with a one-line description."""
     for name, line in scenes.describe().items():
@@ -86,6 +130,14 @@ def _parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     sub.add_parser("demo", help="the main job: scenes solved by QP and direct, a table").set_defaults(func=demo)
     sub.add_parser("scenes", help="list the scenes").set_defaults(func=list_scenes)
+    rep = sub.add_parser("report", help="error against run time for every scene, method and solver")
+    rep.add_argument("--stability", action="store_true", help="run the stability study instead")
+    rep.add_argument("--full", action="store_true", help="finer sweeps (and full-size stability cases)")
+    rep.add_argument("--scenes", nargs="*", help="only these scenes")
+    rep.add_argument("--repeats", type=int, default=2, help="timing repeats (the minimum is kept)")
+    rep.add_argument("--out", default="report", help="directory for CSV/JSON and plots (default: report/)")
+    rep.add_argument("--verbose", action="store_true", help="progress on stderr")
+    rep.set_defaults(func=report)
     return parser
 
 

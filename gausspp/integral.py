@@ -32,7 +32,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 import scipy.sparse as sp
-from scipy.interpolate import CubicSpline
+from scipy.interpolate import make_interp_spline
 
 from .errors import InitialDataError, InputError, NonFiniteError, QPSolveError, ShapeError
 from .model import Model
@@ -168,16 +168,19 @@ def discretize(
     if acceleration == "recorded" and a is None:
         raise InputError("acceleration='recorded' needs the trajectory's accelerations a")
     recorded = a if a is not None else v  # (only read when acceleration == "recorded")
-    v_spline = CubicSpline(t, v, axis=0)
+    if N < 6:
+        raise InputError(f"trajectory: {N} samples; the path's acceleration needs at least 6")
+    v_spline = make_interp_spline(t, v, k=5, axis=0)  # quintic: ẍ from v(t) with O(h⁵) error
+    path_a = v_spline.derivative()
     if nodes is None:
         inside = (t >= t1 - 1e-12) & (t <= t2 + 1e-12)
         tn, qn, vn = t[inside], q[inside], v[inside]
-        an = recorded[inside] if acceleration == "recorded" else v_spline(tn, 1)
+        an = recorded[inside] if acceleration == "recorded" else path_a(tn)
     else:
         tn = np.linspace(t1, t2, int(nodes))
-        qn = np.array([model.mechanism.normalize_array(x) for x in CubicSpline(t, q, axis=0)(tn)])
+        qn = np.array([model.mechanism.normalize_array(x) for x in make_interp_spline(t, q, k=5, axis=0)(tn)])
         vn = v_spline(tn)
-        an = CubicSpline(t, recorded, axis=0)(tn) if acceleration == "recorded" else v_spline(tn, 1)
+        an = make_interp_spline(t, recorded, k=5, axis=0)(tn) if acceleration == "recorded" else path_a(tn)
     if tn.size < 5:
         raise InputError(
             f"too few nodes in the window: {tn.size}; the discretization needs at least 5 (pass nodes=...)"
@@ -343,13 +346,13 @@ def verify(
     window : (t1, t2), optional
         Part of the data to use (default: all).
     nodes : int, optional
-        Resample the window at this many uniform nodes (cubic splines); default: the samples.
+        Resample the window at this many uniform nodes (quintic splines); default: the samples.
     metric : "A", "identity" or an SPD (nv, nv) array
         The matrix of (23); any positive definite one gives the same verdict.
     method : {"qp", "closed-form"}
         The sparse QP (any realization), or the pointwise closed form (``N = 0`` only).
     acceleration : {"path", "recorded"}
-        ``ẍ`` from the path's velocities (cubic spline; the honest check) or the trajectory's
+        ``ẍ`` from the path's velocities (quintic spline; the honest check) or the trajectory's
         recorded accelerations (measured data).
     """
     if method not in ("qp", "closed-form"):

@@ -166,7 +166,7 @@ class Model:
         return None if self._lam0 is None else self._lam0.copy()
 
     # -- compiled kernels ------------------------------------------------------------------
-    def kernel(self, solver: str = "qp", backend: str | None = None) -> Kernel:
+    def kernel(self, solver: str = "qp", backend: str | qp.QPBackend | None = None) -> Kernel:
         """The compiled step for ``solver`` (and QP ``backend``), built on first use and kept.
 
         Its inputs are ``(t, q, v, lam, stab)`` (``stab`` = Baumgarte ``(α, β)``, zero for the exact
@@ -214,7 +214,14 @@ class Model:
         return t, q, v, _state_vector("lam", lam, self.n_lam, t)
 
     def step(
-        self, t: float, q: Any, v: Any, lam: Any = None, *, solver: str = "qp", backend: str | None = None
+        self,
+        t: float,
+        q: Any,
+        v: Any,
+        lam: Any = None,
+        *,
+        solver: str = "qp",
+        backend: str | qp.QPBackend | None = None,
     ) -> StepResult:
         """Solve the step at ``(t, q, v, λ)``: Gauss's principle as a QP, or the direct formula.
 

@@ -24,7 +24,7 @@ from .qpsolvers_route import QpsolversBackend
 
 DEFAULT = "casadi:qrqp"
 
-__all__ = ["DEFAULT", "QPBackend", "get", "names"]
+__all__ = ["DEFAULT", "CasadiConic", "QPBackend", "QpsolversBackend", "get", "names"]
 
 
 def names() -> list[str]:

@@ -23,10 +23,11 @@ from ._base import QPBackend
 _QUIET = {"print_iter": False, "print_header": False, "print_info": False}
 
 #: Plugin → (options, one-line description). Tolerances are set for agreement with the direct solve.
+#: Left out: ``ipqp`` (its LDL factorization breaks down on the pendulum's two-row step and returns
+#: NaN), ``hpipm`` (rejects a dense Hessian), and the commercial plugins (cplex, gurobi, mosek, ...).
 PLUGINS: dict[str, tuple[dict[str, Any], str]] = {
     "qrqp": (dict(_QUIET), "casadi's own active-set QP (sparse QR); round-off accurate, fastest measured"),
     "daqp": ({}, "dual active-set (DAQP); round-off accurate"),
-    "ipqp": (dict(_QUIET), "casadi's own interior-point QP"),
     "qpoases": ({"printLevel": "none", "sparse": False}, "online active-set (qpOASES)"),
     "osqp": (
         {"osqp": {"verbose": False, "eps_abs": 1e-12, "eps_rel": 1e-12, "polishing": True, "max_iter": 20000}},
@@ -73,10 +74,11 @@ class CasadiConic(QPBackend):
 
     compiled = True
 
-    def __init__(self, plugin: str) -> None:
+    def __init__(self, plugin: str, options: dict[str, Any] | None = None, name: str | None = None) -> None:
+        """``options`` replace the plugin's defaults of :data:`PLUGINS` (give ``name`` to tell them apart)."""
         self.plugin = plugin
-        self.name = f"casadi:{plugin}"
-        self.options = {"error_on_fail": False, **PLUGINS[plugin][0]}
+        self.name = name or f"casadi:{plugin}"
+        self.options = {"error_on_fail": False, **(PLUGINS[plugin][0] if options is None else options)}
         self.description = PLUGINS[plugin][1]
 
     @functools.cache  # noqa: B019 - backends are few, long-lived singletons
