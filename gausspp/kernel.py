@@ -138,12 +138,14 @@ def _guard(build: ca.Function) -> ca.Function:
     )
 
 
-def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str, backend: QPBackend | None) -> Kernel:
+def build_kernel(
+    name: str, inputs: list[ca.SX], p: StepExpressions, solver: str, backend: QPBackend | None, refine: bool = True
+) -> Kernel:
     """Compile the step ``p`` (expressions of ``inputs``) for ``solver`` ∈ {"direct", "qp"}."""
     red = reduce(p)
     if solver == "direct":
         return CompiledKernel(
-            ca.Function(f"{name}_direct", inputs, _dense(outputs(p, red, direct_reaction(red), None)))
+            ca.Function(f"{name}_direct", inputs, _dense(outputs(p, red, direct_reaction(red), None, refine)))
         )
     assert backend is not None
     k, m = red.S_hat.shape
@@ -154,7 +156,7 @@ def build_kernel(name: str, inputs: list[ca.SX], p: StepExpressions, solver: str
     rows = ca.if_else(norms > 0, 1 / norms, 1)
     scaled = ca.diag(rows) @ red.S_hat
     build = ca.Function(f"{name}_qp_data", inputs, _dense([ca.SX.eye(m), scaled, rows * red.rhs_hat]))
-    finish = ca.Function(f"{name}_qp_finish", [*inputs, z, y], _dense(outputs(p, red, z, rows * y)))
+    finish = ca.Function(f"{name}_qp_finish", [*inputs, z, y], _dense(outputs(p, red, z, rows * y, refine)))
     if not backend.compiled:
         return PythonQPKernel(build, finish, backend)
     mx_in = [ca.MX.sym(f"in{i}", s.sparsity()) for i, s in enumerate(inputs)]

@@ -41,6 +41,10 @@ class Model:
         A step whose realizability margin is below this warns (:class:`RealizabilityWarning`).
     margin_error : float
         Below this the constraint is deemed unrealizable (:class:`RealizabilityError`).
+    refine : bool
+        One step of iterative refinement after each solve (default). It restores round-off
+        accuracy where ``A`` is ill-conditioned and the constraints nearly fix the acceleration
+        (``a = a₀ + A⁻¹Du`` cancels there); ``False`` shows each solver's raw answer.
 
     Attributes
     ----------
@@ -61,6 +65,7 @@ class Model:
         *,
         margin_warn: float = 1e-6,
         margin_error: float = 1e-12,
+        refine: bool = True,
     ) -> None:
         if not isinstance(mechanism, Mechanism):
             raise InputError(f"mechanism must be a Lagrangian, RigidBody or MassMatrix, got {type(mechanism).__name__}")
@@ -79,7 +84,7 @@ class Model:
         self.names = [c.name if c.name is not None else f"constraint {i}" for i, c in enumerate(constraints)]
         if len(set(self.names)) != len(self.names):
             raise InputError(f"constraint names must be unique, got {self.names}")
-        self.margin_warn, self.margin_error = margin_warn, margin_error
+        self.margin_warn, self.margin_error, self.refine = margin_warn, margin_error, refine
         self._assemble()
         self._kernels: dict[tuple[str, str | None], Kernel] = {}
         self._data_fn: ca.Function | None = None
@@ -182,7 +187,7 @@ class Model:
         if key not in self._kernels or (
             chosen is not None and getattr(self._kernels[key], "backend", chosen) is not chosen
         ):
-            self._kernels[key] = build_kernel("step", self._inputs, self._expressions, solver, chosen)
+            self._kernels[key] = build_kernel("step", self._inputs, self._expressions, solver, chosen, self.refine)
         return self._kernels[key]
 
     # -- checked entry points ---------------------------------------------------------------
