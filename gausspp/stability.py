@@ -387,7 +387,8 @@ def case_stiff_chain(quick: bool = True) -> Case:
     observed = (
         f"Over t ∈ [0, {t_end:g}], ω_max = {f['omega_max']:.4g}: RK4 reaches 1e-6 only with dt ≤ {f['rk4_dt']:.4g} "
         f"(dt·ω = {f['rk4_dt_times_omega']:.2f}, its stability limit 2√2 ≈ 2.83; at dt = "
-        f"{f.get('rk4_next_larger_dt', math.nan):.4g} it diverges): {f['rk4_steps']:.0f} steps, "
+        f"{f.get('rk4_next_larger_dt', math.nan):.4g} the final error is "
+        f"{_fmt(f.get('rk4_next_larger_dt_error', math.nan))}): {f['rk4_steps']:.0f} steps, "
         f"{f['rk4_evaluations']:.0f} evaluations, error {_fmt(f['rk4_error'])}. Radau (rtol 1e-6) takes "
         f"{f['radau_steps']:.0f} steps, {f['radau_evaluations']:.0f} evaluations (plus its Jacobians, not counted), "
         f"error {_fmt(f['radau_error'])}: {f['evaluation_ratio']:.0f}× fewer. Wall: RK4 {f['rk4_wall_s']:.3f} s "
@@ -416,6 +417,7 @@ def case_mass_ratios(quick: bool = True) -> Case:
     worst_disagreement = 0.0
     reference_check = 0.0
     worst_at = ""
+    largest, largest_at = 0.0, ""
     max_cond, min_margin, checked, failures, warned = 1.0, 1.0, 0, 0, 0
     failure_notes: list[str] = []
     for e in exponents:
@@ -456,6 +458,11 @@ def case_mass_ratios(quick: bool = True) -> Case:
                     err = _relative(res.a, ref)
                     min_margin = min(min_margin, res.margin)
                     worst[label] = max(worst[label], err)
+                    if err > largest:
+                        largest = err
+                        largest_at = (
+                            f"{label} on {scene_name} ({realization}), mass ratio {ratio:g}, cond(A) = {cond:.0e}"
+                        )
                     if err / bound > worst_over_bound:
                         worst_over_bound = err / bound
                         worst_at = (
@@ -481,11 +488,17 @@ def case_mass_ratios(quick: bool = True) -> Case:
     errors = ", ".join(f"{label} {_fmt(v)}" for label, v in worst.items())
     observed = (
         f"{checked} steps over mass ratios 1e{min(exponents)}…1e{max(exponents)} (cond(A) up to {max_cond:.0e}, "
-        f"margins down to {min_margin:.1e}): worst relative acceleration errors {errors}; worst error / "
-        f"(eps·cond A) = {worst_over_bound:.2f} ({worst_at}); QP vs direct at most {worst_difference:.2f}·eps·cond "
+        f"margins down to {min_margin:.1e}): worst relative acceleration errors {errors} (largest: {largest_at}); "
+        f"worst error / (eps·cond A) = {worst_over_bound:.2f} ({worst_at}); QP vs direct at most "
+        f"{worst_difference:.2f}·eps·cond "
         f"(the library's disagreement(), scaled by the free acceleration as well, at most "
-        f"{_fmt(worst_disagreement)}). {failures} step failures, {warned} realizability warnings. The loss is the "
-        "reaction-space formulation's: it forms a₀ = A⁻¹f (large when a light mass is pushed) and cancels it."
+        f"{_fmt(worst_disagreement)}). {failures} step failures, {warned} realizability warnings."
+        + (
+            " The loss comes from the reaction-space formulation: a = a₀ + A⁻¹Du with a₀ = A⁻¹f large when a light "
+            "mass is pushed, then cancelled."
+            if worst_over_bound > 3.0
+            else ""
+        )
     )
     problems = tuple(failure_notes[:3])
     return Case(name, what, expected, observed, bool(verdict), figures, problems)
@@ -646,6 +659,7 @@ def case_long_horizon(quick: bool = True) -> Case:
             tenth = int(np.argmin(np.abs(traj.t - 0.1 * t_end)))
             f["raw_g_at_tenth"] = float(g[tenth])
             f["raw_g_growth"] = float(g[-1] / max(g[tenth], 1e-300))
+            f["raw_g_growth_exponent"] = float(np.log(f["raw_g_growth"]) / np.log(traj.t[-1] / traj.t[tenth]))
     f["project_max_residual"] = runs["project"].max_residual()
     verdict = (
         all(traj.steps == n_steps for traj in runs.values())
@@ -656,13 +670,14 @@ def case_long_horizon(quick: bool = True) -> Case:
     )
     observed = (
         f"{n_steps:.0e} steps of dt = {dt:g} (t ≤ {t_end:g}). Raw: |g| grows from {_fmt(f['raw_g_at_tenth'])} at a "
-        f"tenth of the run to {_fmt(f['raw_max_g'])} ({f['raw_g_growth']:.0f}×, ∝ t²: Φ drifts linearly), |Φ| ≤ "
-        f"{_fmt(f['raw_max_Phi'])}, energy off by {_fmt(f['raw_energy_drift'])} (the reaction works on the drift; "
+        f"tenth of the run to {_fmt(f['raw_max_g'])} ({f['raw_g_growth']:.0f}×, ∝ t^{f['raw_g_growth_exponent']:.2f}), "
+        f"|Φ| ≤ {_fmt(f['raw_max_Phi'])}, energy off by {_fmt(f['raw_energy_drift'])} (the reaction works on the "
+        f"drift; "
         f"balance {_fmt(f['raw_energy_balance'])}). Projection: |g|, |Φ| ≤ {_fmt(f['project_max_residual'])}, energy "
         f"drift {_fmt(f['project_energy_drift'])} (RK4 truncation; balance {_fmt(f['project_energy_balance'])}, the "
         f"projection's own energy change is not in the work integrals). Baumgarte τ = 0.1: |g| ≤ "
         f"{_fmt(f['baumgarte_max_g'])}, |Φ| ≤ {_fmt(f['baumgarte_max_Phi'])}, energy drift "
-        f"{_fmt(f['baumgarte_energy_drift'])}, balance {_fmt(f['baumgarte_energy_balance'])} (∝ dt⁴). Wall: raw "
+        f"{_fmt(f['baumgarte_energy_drift'])}, balance {_fmt(f['baumgarte_energy_balance'])}. Wall: raw "
         f"{walls['raw']:.2f} s, projection {walls['project']:.2f} s, Baumgarte {walls['baumgarte']:.2f} s."
     )
     return Case(name, what, expected, observed, bool(verdict), f)
@@ -722,7 +737,10 @@ def case_redundant(quick: bool = True) -> Case:
             outcomes_a[label] = f"answer, error {_fmt(err)}, margin {out.margin:.2g}"
             if err > 1e-8 and not _realizability_warnings(caught):
                 silent_wrong.append(f"circle twice, {label}: error {_fmt(err)}")
-    f["duplicate_errors"] = float(sum(o.startswith(("Realizability", "QPSolve")) for o in outcomes_a.values()))
+    f["duplicate_solvers"] = float(len(outcomes_a))
+    f["duplicate_project_errors"] = float(
+        sum(o.split(":")[0] in ("RealizabilityError", "QPSolveError") for o in outcomes_a.values())
+    )
 
     # B. pins + distance on the manifold: dependent rows, in floating point only nearly so
     scene, redundant = _pendulum_with_distance()
@@ -731,18 +749,24 @@ def case_redundant(quick: bool = True) -> Case:
     kinds_b: dict[str, int] = {}
     margins_b: list[float] = []
     cos_max = 0.0
+    first_error = first_answer = (math.nan, math.nan)
     for phi in grid:
         q, v = _pendulum_state(float(phi), 1.3)
         ref = scene.model.step(0.0, q, v, solver="direct").a
         data = redundant.step_data(0.0, q, v)
-        cos_max = max(cos_max, float(np.max(cosines(data.A, data.J, data.D))))
+        with np.errstate(all="ignore"), _recorded():
+            cos_max = max(cos_max, float(np.nanmax(cosines(data.A, data.J, data.D), initial=0.0)))
         for solver, backend in solvers[:2]:
             out, caught = attempt(redundant, q, v, solver, backend)
             if isinstance(out, BaseException):
                 errors_b += 1
                 kinds_b[_exception_name(out)] = kinds_b.get(_exception_name(out), 0) + 1
+                if math.isnan(first_error[0]):
+                    first_error = (float(phi), math.nan)
                 continue
             answers += 1
+            if math.isnan(first_answer[0]):
+                first_answer = (float(phi), out.margin)
             err = _relative(out.a, ref)
             max_err_b = max(max_err_b, err)
             margins_b.append(out.margin)
@@ -761,6 +785,8 @@ def case_redundant(quick: bool = True) -> Case:
     # C. slightly off the manifold (drift): the rows are independent, the Gram matrix nearly singular
     phi0 = 0.7
     worst_off: dict[float, float] = {}
+    off_margins: list[float] = []
+    off_warned = 0
     for stretch in (1e-10, 1e-8, 1e-6):
         q, v = _pendulum_state(phi0, 1.3, stretch)
         ref = scene.model.step(0.0, q, v, solver="direct").a
@@ -771,6 +797,8 @@ def case_redundant(quick: bool = True) -> Case:
             err = _relative(out.a, ref)
             worst_off[stretch] = max(worst_off.get(stretch, 0.0), err)
             f[f"off_manifold_margin@{stretch:.0e}"] = out.margin
+            off_margins.append(out.margin)
+            off_warned += int(bool(_realizability_warnings(caught)))
             if err > 1e-8 and not _realizability_warnings(caught):
                 silent_wrong.append(
                     f"pins + distance {stretch:.0e} off the manifold ({backend or solver}): error {_fmt(err)}"
@@ -791,9 +819,9 @@ def case_redundant(quick: bool = True) -> Case:
                 )
                 outcomes_d[key] = f"ran to t = {traj.t[-1]:g}"
             except GaussppError as exc:
-                outcomes_d[key] = f"{_exception_name(exc)}: {str(exc)[:90]}"
+                outcomes_d[key] = f"{_exception_name(exc)}: {str(exc)[:110]}…"
             except Exception as exc:  # noqa: BLE001 - a non-project exception is itself a finding
-                outcomes_d[key] = f"{_exception_name(exc)} (not a project error): {str(exc)[:90]}"
+                outcomes_d[key] = f"{_exception_name(exc)} (not a project error): {str(exc)[:110]}…"
                 non_project.append(f"simulate {key}: {_exception_name(exc)}: {exc}")
     f.update(silent_wrong=float(len(silent_wrong)), non_project_exceptions=float(len(non_project)))
     verdict = not silent_wrong and not non_project
@@ -806,11 +834,13 @@ def case_redundant(quick: bool = True) -> Case:
     observed = (
         f"Circle written twice: ({kinds_a})"
         f" — direct says “{duplicate_direct.split(': ', 1)[-1][:150]}…”. Pins + distance on the manifold "
-        f"({grid.size} angles × direct/QP): {errors_b} errors ({kinds}) and {answers} answers, decided by "
-        f"round-off; the answers match the minimal model (≤ {_fmt(max_err_b)}) but report margins "
+        f"({grid.size} angles × direct/QP): {errors_b} errors ({kinds}) and {answers} answers"
+        + (", decided by round-off" if errors_b and answers else "")
+        + f"; the answers match the minimal model (≤ {_fmt(max_err_b)}) but report margins "
         f"{min(margins_b, default=math.nan):.2g}…{max(margins_b, default=math.nan):.2g} where the rank deficiency "
         f"means 0{beyond_one}. Off the manifold by δ (drift) the "
-        f"acceleration departs from the minimal model's by {off} (relative) with margin 1 and no warning "
+        f"acceleration departs from the minimal model's by {off} (relative) with margins "
+        f"{min(off_margins, default=math.nan):.2g}…{max(off_margins, default=math.nan):.2g} and {off_warned} warnings "
         f"(cond(J) = {f['off_manifold_J_condition@1e-08']:.1e} at δ = 1e-8). simulate from the singular start: "
         + "; ".join(f"{k}: {v}" for k, v in outcomes_d.items())
         + "."
@@ -820,7 +850,8 @@ def case_redundant(quick: bool = True) -> Case:
         problems.append(
             "Silently wrong acceleration with redundant constraints off the manifold: the pendulum's pins plus "
             "'distance: x² + z² − L² = 0' at q = (cos 0.7·(1 + δ), sin 0.7, 0.7), v = 1.3·(−sin 0.7, cos 0.7, 1): "
-            f"relative error vs the minimal model {off}; margin 1, no warning. The margin (cosines of Ŝ, whitened "
+            f"relative error vs the minimal model {off}; margin {min(off_margins, default=math.nan):.2g}, no "
+            "warning. The margin (cosines of Ŝ, whitened "
             "by chol(J A⁻¹ Jᵀ)) is 1 for any ideal constraint however ill-conditioned J A⁻¹ Jᵀ is, unlike DESIGN §2's "
             "σ_min(S)/(‖J‖·‖A⁻¹D‖). Repro: `sc = gp.scenes.get('pendulum'); red = gp.Model(sc.model.mechanism, "
             "[*sc.model.constraints, gp.Holonomic(lambda q, t: q[0]**2 + q[1]**2 - 1, name='distance')]); "
@@ -833,9 +864,12 @@ def case_redundant(quick: bool = True) -> Case:
             f"margin ({min(margins_b):.2g}…{max(margins_b):.2g} instead of 0) and an arbitrary split of the reaction "
             f"among the dependent rows; gausspp.realizability.cosines returns up to {cos_max:.3f} instead of the "
             "documented zeros when J is rank deficient (numpy's Cholesky of a singular Gram matrix does not always "
-            "fail). Repro: red.step(0, *state(φ)) for φ = 0.0 (error) and 0.3 (answer, margin ≈ 0.5–1)."
+            "fail). Repro (state q = (cos φ, sin φ, φ), v = 1.3·(−sin φ, cos φ, 1)): "
+            f"red.step(0, q, v) at φ = {first_error[0]:.2f} raises, at φ = {first_answer[0]:.2f} answers with margin "
+            f"{first_answer[1]:.2g}."
         )
-    if any(o.startswith("RealizabilityError") for o in outcomes_a.values()):
+    duplicate_message = outcomes_a.get("direct", "")
+    if "change one of the realizations" in duplicate_message and "redundant" not in duplicate_message:
         problems.append(
             "Misleading message for redundant ideal constraints: “each realizable but not together … their reaction "
             "directions are dependent — change one of the realizations”; the constraints are ideal and their rows "
@@ -907,7 +941,10 @@ def case_off_constraint(quick: bool = True) -> Case:
                 if scene is two and not np.allclose(traj.v[0], [0.5, 0.5], rtol=0, atol=1e-15):
                     notes.append(f"{label}: projected to v = {traj.v[0]}, not along A⁻¹D = (1/m1, 0)")
             except GaussppError as exc:
-                failed_projection.append(f"{label}: {_exception_name(exc)}: {exc}")
+                left = re.search(r"(g\(q, t\)|Φ\(q, v, t\)) = \S+", str(exc))
+                failed_projection.append(
+                    f"{label}: {_exception_name(exc)} after the projection, {left.group(0) if left else exc}"
+                )
     f = {
         "setups": float(len(setups)),
         "named_errors": float(named),
@@ -919,7 +956,7 @@ def case_off_constraint(quick: bool = True) -> Case:
         f"Without stabilization all {named}/{len(setups)} setups raise InitialDataError naming the constraint, t=0 "
         f"and the value; with stabilize='project' {projected}/{len(setups)} start on the constraint (≤ 1e-12; the "
         "two-masses servo moves only mass 1, along A⁻¹D)."
-        + (" Projection failed: " + "; ".join(p[:200] for p in failed_projection) + "." if failed_projection else "")
+        + (" Projection failed: " + "; ".join(failed_projection) + "." if failed_projection else "")
         + (" Other: " + "; ".join(notes) + "." if notes else "")
     )
     problems = []
@@ -935,6 +972,22 @@ def case_off_constraint(quick: bool = True) -> Case:
 
 
 # -- 7. crane near the vertical rope ------------------------------------------------------------
+def _attempt_simulation(
+    model: Model, scene: scenes.Scene, method: str, options: dict[str, Any]
+) -> tuple[Trajectory | None, BaseException | None, bool]:
+    """Run a simulation expected to fail: (what it kept, the exception, whether it warned about the margin)."""
+    traj: Trajectory | None = None
+    exc: BaseException | None = None
+    with _recorded() as caught, _quiet_c_output():
+        try:
+            traj = simulate(model, scene.q0, scene.v0, scene.t_end, method=method, **options)
+        except GaussppError as err:
+            exc, traj = err, getattr(err, "trajectory", None)
+        except Exception as err:  # noqa: BLE001 - a non-project exception is itself a finding
+            exc = err
+    return traj, exc, bool(_realizability_warnings(caught))
+
+
 def case_crane_vertical(quick: bool = True) -> Case:
     """Margin ∝ sin²θ; driven to the vertical rope, every lane must warn, then stop at t*."""
     from .scenes.crane import margin_closed_form
@@ -958,9 +1011,12 @@ def case_crane_vertical(quick: bool = True) -> Case:
     for solver in ("direct", "qp"):
         try:
             model.step(1.25, [0.0, 0.0], [0.0, 0.0], solver=solver)
-        except RealizabilityError as exc:
+        except RealizabilityError as vertical:
             vertical_ok += int(
-                exc.constraint == _CRANE_ROW and exc.t == 1.25 and exc.margin < 1e-12 and "t=1.25" in str(exc)
+                vertical.constraint == _CRANE_ROW
+                and vertical.t == 1.25
+                and vertical.margin < 1e-12
+                and "t=1.25" in str(vertical)
             )
     f.update(
         step_margin_vs_closed_form=worst_closed,
@@ -992,18 +1048,8 @@ def case_crane_vertical(quick: bool = True) -> Case:
     lines: list[str] = []
     bad: dict[str, str] = {}
     for label, mdl, method, options in runs:
-        options = {"solver": "direct", **options}
         start = time.perf_counter()
-        with _recorded() as caught, _quiet_c_output():
-            try:
-                traj = simulate(mdl, fall.q0, fall.v0, fall.t_end, method=method, **options)
-                exc: BaseException | None = None
-            except GaussppError as err:
-                exc = err
-                traj = getattr(err, "trajectory", None)
-            except Exception as err:  # noqa: BLE001 - a non-project exception is itself a finding
-                exc, traj = err, None
-        warned = bool(_realizability_warnings(caught))
+        traj, exc, warned = _attempt_simulation(mdl, fall, method, {"solver": "direct", **options})
         beyond = 0
         if traj is not None and len(traj):
             crossed = (traj.q[:, 1] * theta0 < 0) | (traj.t > t_star + 1e-6) | (np.abs(traj.g[:, 0]) > 1e-6)
@@ -1048,18 +1094,19 @@ def case_crane_vertical(quick: bool = True) -> Case:
         problems.append(
             "Fixed-step RK4 (both lanes) steps over the singular instant t*: no RealizabilityWarning, samples past "
             "t* are kept (the rope beyond the vertical, |g| ≫ 0, margin back near 1 — there is no motion there), and "
-            "the error is a NonFiniteError “the integration is unstable; reduce dt” a few steps later; a smaller dt "
-            "fails the same way. The margin is not checked at the stages, nor does the error name the lost "
-            "realizability. Repro: f = gp.scenes.get('crane', theta0=-0.3, accel=0.0, distance=0.0); "
-            "gp.simulate(f.model, f.q0, f.v0, 0.2, dt=1e-3, method='rk4', throw=False)."
+            "the error is a NonFiniteError “the integration is unstable; reduce dt” a few steps later"
+            + ("; dt = 1e-5 fails the same way" if "rk4-compiled dt=1e-5" in bad else "")
+            + ". The margin is not checked at the stages, nor does the error name the lost realizability. "
+            f"Failing runs: {', '.join(fixed)}. Repro: f = gp.scenes.get('crane', theta0=-0.3, accel=0.0, "
+            "distance=0.0); gp.simulate(f.model, f.q0, f.v0, 0.2, dt=1e-3, method='rk4', throw=False)."
         )
     if "cvodes" in bad:
         problems.append(
             "cvodes driven to the vertical rope: after "
             f"{f.get('cvodes_wall_s', math.nan):.0f} s (max_num_steps = 10⁷ stalled at t*) a bare GaussppError (not "
             "IntegrationError) “CVODES failed between t=0 and t=1: CV_TOO_MUCH_WORK” with no time of failure, no "
-            "warning and no kept prefix (the whole run is lost); SUNDIALS also prints to the terminal. Repro: gp.simulate(f.model, f.q0, f.v0, 1.0, "
-            "method='cvodes', solver='direct')."
+            "warning and no kept prefix (the whole run is lost); SUNDIALS also prints to the terminal. Repro: "
+            "gp.simulate(f.model, f.q0, f.v0, 1.0, method='cvodes', solver='direct')."
         )
     others = [k for k in bad if not k.startswith("rk4") and k != "cvodes"]
     problems += [bad[k] for k in others]
@@ -1103,7 +1150,7 @@ def run(quick: bool = True) -> list[Case]:
     return cases
 
 
-def table(cases: list[Case], width: int = 110) -> str:
+def table(cases: list[Case], width: int = 100) -> str:
     """A plain-text table: case, verdict (✓/✗), observed summary; then the library problems found."""
     name_w = max([len("case"), *(len(c.name) for c in cases)])
     head = f"{'case':{name_w}s}  verdict  observed"
