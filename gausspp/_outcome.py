@@ -100,7 +100,8 @@ def _unrealizable(
     names = ", ".join(repr(g.name) for g in groups)
     return RealizabilityError(
         f"constraints {names} are each realizable but not together {_where(t)}: margin {margin:.3g} "
-        "(J A⁻¹ D is singular); their reaction directions are dependent — change one of the realizations",
+        "(J A⁻¹ D is singular): their constraint rows or their reaction directions are dependent — remove a "
+        "redundant constraint, or change one of the realizations",
         t=t,
         constraint=names,
         margin=margin,
@@ -130,18 +131,18 @@ def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, m
         _check_data(d, t, groups)
         if not (pivot > 0):
             raise _not_positive_definite(d, t)
-    S_hat = out["S_hat"]
-    k, m = S_hat.shape if S_hat.ndim == 2 else (S_hat.size, 1)
-    if not finite and not np.isfinite(S_hat.sum()):
+    S_norm = out["S_norm"]
+    k, m = S_norm.shape if S_norm.ndim == 2 else (S_norm.size, 1)
+    if not finite and not np.isfinite(S_norm.sum()):
         cos = np.zeros(min(k, m))
     elif k == 1:  # the singular value of one row is its length
-        cos = np.array([np.sqrt(float(S_hat.ravel() @ S_hat.ravel()))])
+        cos = np.array([np.sqrt(float(S_norm.ravel() @ S_norm.ravel()))])
     else:
-        cos = np.linalg.svd(S_hat.reshape(k, m), compute_uv=False)
+        cos = np.linalg.svd(S_norm.reshape(k, m), compute_uv=False)
     margin = float(cos[-1]) if k <= m and cos.size else 0.0
     if margin < margin_error:
         raise _unrealizable(data(), t, margin, groups, margin_error)
-    if not finite and not all(np.all(np.isfinite(v)) for name, v in out.items() if name not in ("S_hat", "checksum")):
+    if not finite and not all(np.all(np.isfinite(v)) for name, v in out.items() if name not in ("S_norm", "checksum")):
         raise NonFiniteError(
             f"the step produced NaN or inf {_where(t)} although its data are finite; margin {margin:.3g}"
         )

@@ -47,7 +47,7 @@ class RightHandSide:
         out = self.kernel.result()
         ok = out["pivot"][0] > 0 and np.isfinite(out["checksum"][0]) and out["qp_primal"][0] <= QP_TOLERANCE
         if ok and self._scalar_margin:
-            ok = abs(out["S_hat"].flat[0]) >= self.model.margin_error
+            ok = abs(out["S_norm"].flat[0]) >= self.model.margin_error
         if not ok:  # diagnose: raises the project error that explains the failure
             size = float(np.max(np.abs(y)))
             if not size < 1e100:

@@ -26,11 +26,12 @@ class StepResult:
         Gauss's compulsion ``Z = (A(a − a₀), a − a₀) = uᵀ Dᵀ A⁻¹ D u`` with
         ``a₀ = A⁻¹(F − h + r₀)``, the quantity the step minimizes.
     margin : float
-        Realizability margin: the smallest cosine of the principal angles between the
-        constraint normals and the reaction directions in the metric ``A⁻¹`` (1 for ideal
-        constraints, 0 when (12)/(16) fail).
+        Realizability margin: the smallest singular value of ``S = J A⁻¹ D`` with rows and
+        columns normalized in the metric ``A⁻¹`` (see :mod:`gausspp.realizability`): 1 for one
+        ideal constraint, 0 when (12)/(16) fail or the constraint rows are redundant.
     cosines : (k,) array
-        All those cosines, largest first.
+        All those singular values, largest first (the cosine of the angle between normal and
+        reaction direction, for one constraint).
     residual : (k,) array
         ``J a − φ``: how well the acceleration keeps the differentiated constraint.
     constraint_value : (k,) array

@@ -22,7 +22,15 @@ from . import qp
 from ._outcome import QP_TOLERANCE, Where, to_result
 from ._rhs import RightHandSide
 from .drift import Baumgarte, Stabilization, as_stabilization, projection_function
-from .errors import GaussppError, InitialDataError, InputError, IntegrationError, NonFiniteError, RealizabilityWarning
+from .errors import (
+    GaussppError,
+    InitialDataError,
+    InputError,
+    IntegrationError,
+    NonFiniteError,
+    RealizabilityError,
+    RealizabilityWarning,
+)
 from .model import Model
 from .trajectory import Trajectory
 
@@ -95,7 +103,7 @@ def simulate(
     stab = as_stabilization(stabilize, dt)
     q, v, lam = _initial_state(model, t0, q0, v0, lam0)
     if stab.project:
-        q, v = _project(model)(t0, q, v, lam)
+        q, v = _project_initial(model, t0, q, v, lam, constraint_tol)
     _check_on_constraint(model, t0, q, v, lam, constraint_tol)
 
     rhs = RightHandSide(model, solver, backend, stab)
@@ -148,12 +156,40 @@ def _project(model: Model) -> Callable[[float, np.ndarray, np.ndarray, np.ndarra
     return project
 
 
-def _check_on_constraint(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, tol: float) -> None:
+def _residuals(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     data = model.kernel("direct")(t, q, v, lam, np.zeros(2))
-    Phi, g = data["Phi"], data["g"]
+    return data["g"].copy(), data["Phi"].copy()
+
+
+def _project_initial(
+    model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, tol: float, max_steps: int = 50
+) -> tuple[np.ndarray, np.ndarray]:
+    """Newton steps of the projection until ``g`` and ``Φ`` are within ``tol/1000`` (or fail clearly)."""
+    project = _project(model)
+    for _ in range(max_steps):
+        g, Phi = _residuals(model, t, q, v, lam)
+        size = float(np.max(np.abs(np.concatenate([g, Phi]))))
+        if size <= tol * 1e-3:
+            return q, v
+        q, v = project(t, q, v, lam)
+        if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+            raise InitialDataError(
+                f"projecting the initial data onto the constraints failed at t={t:.6g} (NaN): the constraint rows are "
+                "dependent (redundant constraints) or the realization cannot move the state there; give q0/v0 on "
+                "the constraint"
+            )
+    raise InitialDataError(
+        f"projecting the initial data onto the constraints did not converge in {max_steps} Newton steps "
+        f"(|g|, |Φ| still {size:.3g} at t={t:.6g}); start closer to the constraint"
+    )
+
+
+def _check_on_constraint(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, tol: float) -> None:
+    g, Phi = _residuals(model, t, q, v, lam)
     for values, what in ((g, "g(q, t)"), (Phi, "Φ(q, v, t)")):
-        worst = int(np.argmax(np.abs(values))) if values.size else 0
-        if values.size and abs(values[worst]) > tol:
+        bad = np.flatnonzero(~(np.abs(values) <= tol))  # NaN counts as off
+        if bad.size:
+            worst = int(bad[np.argmax(np.nan_to_num(np.abs(values[bad]), nan=np.inf))])
             raise InitialDataError(
                 f"initial data are off the constraint {model.row_names[worst]!r} at t={t:.6g}: {what} = "
                 f"{values[worst]:.3g} (tolerance {tol:g}); correct q0/v0, or pass stabilize='project' to "
@@ -311,7 +347,7 @@ def _record(
     for row in ys:  # adaptive lanes integrate q freely: bring samples back onto the manifold (unit quaternions)
         row[:nq] = model.mechanism.normalize_array(row[:nq])
     cols: dict[str, list[np.ndarray]] = {
-        k: [] for k in ("a", "u", "reaction", "compulsion", "Phi", "g", "S_hat", "energy")
+        k: [] for k in ("a", "u", "reaction", "compulsion", "Phi", "g", "S_norm", "energy")
     }
     kernel = rhs.kernel
     record_failure: Exception | None = None
@@ -327,8 +363,23 @@ def _record(
             cols[k].append(np.array(out[k], copy=True))
     del kernel
     ts, ys = ts[:kept], ys[:kept]
-    S = np.array(cols["S_hat"]).reshape(kept, model.k, -1) if kept else np.zeros((0, model.k, model.m))
+    S = np.array(cols["S_norm"]).reshape(kept, model.k, -1) if kept else np.zeros((0, model.k, model.m))
     margin = np.linalg.svd(S, compute_uv=False).min(axis=1) if kept and model.m >= model.k else np.zeros(kept)
+    if kept > 1 and model.m == model.k:  # det S is continuous along a motion: a sign change means S was singular
+        flips = np.flatnonzero(np.sign(np.linalg.det(S[1:])) * np.sign(np.linalg.det(S[:-1])) < 0)
+        if flips.size and record_failure is None:
+            i = int(flips[0])
+            record_failure = RealizabilityError(
+                f"the realizability margin passed through zero between t={ts[i]:.6g} and t={ts[i + 1]:.6g} "
+                f"(constraints {', '.join(repr(n) for n in model.names)}): the realization cannot keep the "
+                "constraint there and the step went past it; samples after it are dropped",
+                t=float(ts[i + 1]),
+                constraint=", ".join(model.names),
+                margin=0.0,
+            )
+            margin = margin[: i + 1]
+            ts, ys, kept = ts[: i + 1], ys[: i + 1], i + 1
+            cols = {k: v[: i + 1] for k, v in cols.items()}
     bad = np.flatnonzero(margin < model.margin_error)
     if bad.size and record_failure is None:
         i = int(bad[0])
@@ -388,7 +439,15 @@ def _record(
 
 
 def _failed(traj: Trajectory, failure: Exception) -> Trajectory:
-    return replace(traj, status="failed", message=f"{type(failure).__name__}: {failure}")
+    message = f"{type(failure).__name__}: {failure}"
+    if isinstance(failure, (NonFiniteError, IntegrationError)) and traj.margin.size:
+        i = int(np.argmin(traj.margin))
+        if traj.margin[i] < 1e-2:  # a failing integration near a singular step: say so
+            message += (
+                f" [smallest realizability margin on the way: {traj.margin[i]:.3g} at t={traj.t[i]:.6g} — the "
+                "realization may have lost the constraint there]"
+            )
+    return replace(traj, status="failed", message=message)
 
 
 __all__ = ["QP_TOLERANCE", "simulate"]

@@ -12,11 +12,15 @@ Eliminating ``q̈ = a₀ + A⁻¹ D u`` with ``a₀ = A⁻¹(f + r₀)`` leaves,
 Both solvers work on this reduction: the direct one solves ``S u = φ − J a₀``; the QP
 minimizes ``½ uᵀ H u`` subject to it (the generalized Gauss principle, paper §3).
 
-**Realizability margin.** The singular values of ``Ŝ = L_J⁻¹ S L_D⁻ᵀ``, with
-``L_J L_Jᵀ = J A⁻¹ Jᵀ`` and ``L_D L_Dᵀ = Dᵀ A⁻¹ D``, are the cosines of the principal angles
-between the constraint normals ``range(Jᵀ)`` and the reaction directions ``range(D)`` in the
-kinetic metric ``A⁻¹``. Their minimum is the margin: 1 for an ideal constraint, 0 exactly
-when conditions (12)/(16) fail, and free of units and of the choice of coordinates.
+**Realizability margin.** The smallest singular value of ``S`` with each row of ``J`` and each
+column of ``D`` normalized in the kinetic metric ``A⁻¹`` (DESIGN §2's σ_min(S)/(‖J‖·‖A⁻¹D‖), per
+row and column): for one constraint the cosine of the angle between its normal and its
+reaction direction, 1 for an ideal constraint, and 0 exactly when ``S`` is singular — the
+realization cannot keep the constraint (12)/(16), or the constraint rows are redundant. It is
+free of units and of the choice of coordinates.
+
+The solve itself uses ``Ŝ = L_J⁻¹ S L_D⁻ᵀ`` (``L_J L_Jᵀ = J A⁻¹ Jᵀ``, ``L_D L_Dᵀ = Dᵀ A⁻¹ D``),
+whose condition number does not inherit that of ``A``.
 """
 
 from __future__ import annotations
@@ -72,6 +76,7 @@ class Reduced:
     """
 
     S_hat: ca.SX
+    S_norm: ca.SX
     rhs_hat: ca.SX
     RD: ca.SX
     R: ca.SX
@@ -97,7 +102,9 @@ def reduce(p: StepExpressions) -> Reduced:
     Jt = ca.solve(R.T, p.J.T).T  # J R⁻¹
     RJ = ca.chol(Jt @ Jt.T)
     RD = ca.chol(W.T @ W)
-    S_hat = ca.solve(RD.T, ca.solve(RJ.T, Jt @ W).T).T
+    S = Jt @ W
+    S_hat = ca.solve(RD.T, ca.solve(RJ.T, S).T).T
+    S_norm = S / (ca.sqrt(ca.sum2(Jt * Jt)) @ ca.sqrt(ca.sum1(W * W)))
     rhs_hat = ca.solve(RJ.T, p.phi - p.J @ a0)
     diagR = ca.diag(R)
     # Relative smallest pivot: NaN or ≤ 0 when A is not positive definite
@@ -106,7 +113,9 @@ def reduce(p: StepExpressions) -> Reduced:
     if not ca.is_equal(p.A, p.A.T, 20):
         asym = ca.mmax(ca.fabs(p.A - p.A.T)) / ca.mmax(ca.fabs(p.A))
         pivot = ca.if_else(asym > 1e-12, -1.0, pivot)
-    return Reduced(S_hat=S_hat, rhs_hat=rhs_hat, RD=RD, R=R, RJ=RJ, a0=a0, AinvD=AinvD, a_free=a_free, pivot=pivot)
+    return Reduced(
+        S_hat=S_hat, S_norm=S_norm, rhs_hat=rhs_hat, RD=RD, R=R, RJ=RJ, a0=a0, AinvD=AinvD, a_free=a_free, pivot=pivot
+    )
 
 
 #: Names of a step kernel's outputs, in order.
@@ -115,7 +124,7 @@ OUTPUTS = (
     "u",
     "reaction",
     "compulsion",
-    "S_hat",
+    "S_norm",
     "residual",
     "Phi",
     "pivot",
@@ -182,7 +191,7 @@ def outputs(p: StepExpressions, red: Reduced, z: ca.SX, y: ca.SX | None, refine:
         u,
         R,
         ca.sumsqr(z),
-        red.S_hat,
+        red.S_norm,
         p.J @ a - p.phi,
         p.Phi,
         red.pivot,

@@ -46,7 +46,9 @@ class QpsolversBackend(QPBackend):
         try:
             sol = qpsolvers.solve_problem(problem, solver=self.solver, **OPTIONS.get(self.solver, {}))
         except Exception as exc:  # the backend's own error, re-raised as ours (no abstraction leak)
-            raise QPSolveError(f"{self.name} failed on the step QP: {exc}; try backend='casadi:qrqp'") from exc
+            raise QPSolveError(
+                f"{self.name} failed on the step QP: {exc}; check the realizability margin, or try another backend"
+            ) from exc
         if not sol.found or sol.x is None or not np.all(np.isfinite(sol.x)):
             raise QPSolveError(
                 f"{self.name} found no solution of the step QP; try backend='casadi:qrqp' or solver='direct'"
