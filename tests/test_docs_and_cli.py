@@ -39,12 +39,18 @@ def test_example_runs(script: str, tmp_path: Path) -> None:
 
 
 def test_demo_table(capsys: pytest.CaptureFixture[str]) -> None:
+    import gausspp as gp
+
     assert cli.main(["demo"]) == 0
     out = capsys.readouterr().out
-    rows = [line for line in out.splitlines() if line.startswith(("two-masses", "rigid-body-servo"))]
-    assert len(rows) == 8
-    qp_rows = [r for r in rows if " qp " in r]
-    assert all(float(r.split()[-2]) < 1e-12 for r in qp_rows)  # QP vs direct column
+    first = out.split("Every scene")[0].splitlines()
+    step_rows = [line for line in first if line.startswith(("two-masses", "rigid-body-servo"))]
+    assert len(step_rows) == 8
+    assert all(float(r.split()[-2]) < 1e-12 for r in step_rows if " qp " in r)  # QP vs direct column
+    scene_rows = {line.split()[0]: line.split() for line in out.split("verified by (23)")[1].splitlines()[3:] if line}
+    for name in gp.scenes.names():  # every scene: QP ≡ direct along the run, and a motion by (23)
+        row = scene_rows[name]
+        assert row[-2] == "yes" and float(row[-7]) < 1e-12
 
 
 def test_scenes_listing(capsys: pytest.CaptureFixture[str]) -> None:
