@@ -50,7 +50,7 @@ def test_demo_table(capsys: pytest.CaptureFixture[str]) -> None:
     scene_rows = {line.split()[0]: line.split() for line in out.split("verified by (23)")[1].splitlines()[3:] if line}
     for name in gp.scenes.names():  # every scene: QP ≡ direct along the run, and a motion by (23)
         row = scene_rows[name]
-        assert row[-2] == "yes" and float(row[-7]) < 1e-12
+        assert row[-2] == "yes" and float(row[-6]) < 1e-12
 
 
 def test_scenes_listing(capsys: pytest.CaptureFixture[str]) -> None:
