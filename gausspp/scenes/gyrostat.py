@@ -22,40 +22,12 @@ import casadi as ca
 import numpy as np
 
 from ..constraints import Constraint
-from ..errors import InputError, ShapeError
+from ..errors import ShapeError
 from ..frontends import RigidBody
 from ..model import Model
 from ..realizations import Inertial
+from ._rigid import inertia_matrix, on_plane, unit_vector
 from ._scene import Scene
-
-
-def unit_vector(scene: str, name: str, value: Any) -> np.ndarray:
-    """``value`` as a unit 3-vector, or a clear error naming the scene and the parameter."""
-    vec = np.asarray(value, dtype=float).ravel()
-    if vec.shape != (3,):
-        raise ShapeError(f"{scene}: {name} must have 3 components, got {vec.size}")
-    norm = np.linalg.norm(vec)
-    if not np.isfinite(norm) or norm == 0:
-        raise InputError(f"{scene}: {name} must be a finite nonzero vector, got {vec.tolist()}")
-    return vec / norm
-
-
-def inertia_matrix(scene: str, inertia: Any) -> np.ndarray:
-    """A 3-vector of principal moments or a 3×3 tensor, as a 3×3 array (checked by the front end)."""
-    arr = np.asarray(inertia, dtype=float)
-    if arr.shape == (3,):
-        return np.diag(arr)
-    if arr.shape != (3, 3):
-        raise ShapeError(f"{scene}: inertia must be 3 principal moments or a 3×3 tensor, got shape {arr.shape}")
-    return arr
-
-
-def on_plane(omega0: Any, l: np.ndarray) -> np.ndarray:
-    """``omega0`` projected onto the plane ``(ω, l) = 0`` (``l`` a unit vector)."""
-    w0 = np.asarray(omega0, dtype=float).ravel()
-    if w0.shape != (3,):
-        raise ShapeError(f"omega0 must have 3 components, got {w0.size}")
-    return w0 - np.dot(w0, l) * l
 
 
 def build(

@@ -31,8 +31,8 @@ from ..errors import InputError
 from ..frontends import MassMatrix
 from ..model import Model
 from ..realizations import Force
+from ._rigid import inertia_matrix, on_plane, unit_vector
 from ._scene import Scene
-from .gyrostat import inertia_matrix, on_plane, unit_vector
 
 
 def rotor_momentum(v: Any, n: Any, rotor_inertia: float) -> np.ndarray:

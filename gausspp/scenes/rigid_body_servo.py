@@ -14,21 +14,11 @@ import casadi as ca
 import numpy as np
 
 from ..constraints import Constraint
-from ..errors import InputError, ShapeError
 from ..frontends import RigidBody
 from ..model import Model
 from ..realizations import Force
+from ._rigid import inertia_matrix, unit_vector
 from ._scene import Scene
-
-
-def _unit(name: str, value: Any) -> np.ndarray:
-    vec = np.asarray(value, dtype=float).ravel()
-    if vec.shape != (3,):
-        raise ShapeError(f"rigid-body-servo: {name} must have 3 components, got {vec.size}")
-    norm = np.linalg.norm(vec)
-    if not np.isfinite(norm) or norm == 0:
-        raise InputError(f"rigid-body-servo: {name} must be a finite nonzero vector, got {vec.tolist()}")
-    return vec / norm
 
 
 def build(
@@ -43,9 +33,9 @@ def build(
     ``inertia`` is a 3-vector of principal moments or a 3×3 tensor; ``omega0`` is projected onto
     the plane ``(ω, l) = 0`` so that the initial data lie on the constraint.
     """
-    I = np.diag(np.asarray(inertia, float)) if np.ndim(inertia) == 1 else np.asarray(inertia, float)
-    l_ = _unit("l", l)
-    n_ = l_ if n is None else _unit("n", n)
+    I = inertia_matrix("rigid-body-servo", inertia)
+    l_ = unit_vector("rigid-body-servo", "l", l)
+    n_ = l_ if n is None else unit_vector("rigid-body-servo", "n", n)
     body = RigidBody(inertia=I)
     servo = Force(M=lambda q, w, t: ca.DM(n_).T)
     model = Model(body, [Constraint(lambda q, w, t: ca.dot(w, ca.DM(l_)), name="(ω, l) = 0", realization=servo)])
