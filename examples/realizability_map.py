@@ -9,40 +9,28 @@ Run: python examples/realizability_map.py [output.png]
 
 import sys
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt
 import numpy as np
 
-import gausspp as gp
+from gausspp import plot
 
-inertia = np.diag([1.0, 2.0, 3.0])
-l = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
+inertia = (1.0, 2.0, 3.0)
+l = (1.0, 1.0, 1.0)  # not a principal axis
 
-lon = np.linspace(-np.pi, np.pi, 361)
-lat = np.linspace(-np.pi / 2, np.pi / 2, 181)
-LON, LAT = np.meshgrid(lon, lat)
-N = np.stack([np.cos(LAT) * np.cos(LON), np.cos(LAT) * np.sin(LON), np.sin(LAT)], axis=-1)
-margin = np.array([[gp.realizability.margin(inertia, l[None, :], n[:, None]) for n in row] for row in N])
-
-fig, ax = plt.subplots(figsize=(9, 4.5))
-im = ax.pcolormesh(np.degrees(LON), np.degrees(LAT), np.log10(np.maximum(margin, 1e-6)), cmap="viridis", shading="auto")
-fig.colorbar(im, ax=ax, label="log₁₀ realizability margin")
-ax.contour(np.degrees(LON), np.degrees(LAT), N @ np.linalg.solve(inertia, l), [0.0], colors="red", linewidths=2)
-ax.contour(np.degrees(LON), np.degrees(LAT), N @ l, [0.0], colors="white", linestyles="--", linewidths=1.5)
-ax.plot([], [], "r-", label="true zero set (I⁻¹n, l) = 0")
-ax.plot([], [], "w--", label="naive n ⊥ l")
-ax.legend(loc="lower left", facecolor="0.3", labelcolor="white")
-ax.set(
-    xlabel="longitude of n [°]",
-    ylabel="latitude of n [°]",
-    title="Servo torque along n keeping (ω, l) = 0, l = (1,1,1)/√3, I = diag(1,2,3)",
+grid = plot.realizability_grid(inertia, l, resolution=1.0)
+print(f"I = diag{inertia}, l = {np.round(grid.l, 3)}; I⁻¹l points along {np.round(grid.pole, 3)}")
+print(
+    f"on the naive circle n ⟂ l the margin runs from {grid.naive_margin.min():.3f} to "
+    f"{grid.naive_margin.max():.3f} (median {np.median(grid.naive_margin):.3f}): most of these axes work"
 )
+print(f"on the true zero set (I⁻¹n, l) = 0 it is at most {grid.true_margin.max():.1e}: these axes cannot act")
+
+principal = plot.realizability_grid(inertia, (0.0, 0.0, 1.0))
+print(
+    f"for the principal axis l = (0, 0, 1) the two circles coincide: margin on n ⟂ l at most "
+    f"{principal.naive_margin.max():.1e}"
+)
+
+fig = plot.realizability_map(grid=grid)
 out = sys.argv[1] if len(sys.argv) > 1 else "realizability_map.png"
 fig.savefig(out, dpi=110, bbox_inches="tight")
-off = np.abs(N @ l) < 0.01
-print(
-    f"directions with n ⊥ l: margin between {margin[off].min():.3f} and {margin[off].max():.3f} — most are realizable"
-)
-print(f"smallest margin on the grid: {margin.min():.2e} (near the red circle n ⊥ I⁻¹l); figure written to {out}")
+print(f"map of the margin over the sphere of axes n written to {out}")

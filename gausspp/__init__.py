@@ -8,7 +8,7 @@ compulsion as a QP and is cross-checked against the direct multiplier solution.
 
 from __future__ import annotations
 
-from . import methods, qp, realizability, scenes
+from . import methods, plot, qp, realizability, report, scenes
 from .constraints import Constraint, Holonomic
 from .drift import Baumgarte
 from .errors import (
@@ -70,8 +70,10 @@ __all__ = [
     "Vakonomic",
     "Verification",
     "methods",
+    "plot",
     "qp",
     "realizability",
+    "report",
     "scenes",
     "simulate",
     "solve",

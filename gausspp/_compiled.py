@@ -107,15 +107,13 @@ def integrate_compiled(
     record: Any,
 ) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int]:
     """Run a compiled-lane method; return ``(t, Y, steps, failure, rhs evaluations)`` on the recorded grid."""
-    F = rhs_function(model, solver, backend)
     if meth.name == "cvodes":
-        return _cvodes(model, F, solver, stab, t0, t_end, dt, y0, rtol, atol, record)
+        return _cvodes(model, rhs_function(model, solver, backend), solver, stab, t0, t_end, dt, y0, rtol, atol, record)
     assert meth.tableau is not None and dt is not None
     n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
     times = t0 + dt * np.arange(n_steps + 1)
     times[-1] = t_end
-    step = _rk_step(model, F, meth.tableau, stab)
-    run = step.mapaccum("run", n_steps)
+    step, run = _compiled_run(model, solver, backend, meth, stab, n_steps)
     h, s = np.diff(times)[None, :], np.array(stab.stab)
     try:
         Y = np.vstack([y0[None, :], np.array(run(y0, times[:-1][None, :], h, s)).T])
@@ -134,6 +132,21 @@ def integrate_compiled(
         keep = _on_grid(times, wanted[wanted <= times[-1] + 1e-12] if failure else wanted)
     steps = times.size - 1
     return times[keep], Y[keep], steps, failure, steps * len(meth.tableau.c)
+
+
+def _compiled_run(
+    model: Model, solver: str, backend: str | None, meth: _methods.Method, stab: Stabilization, n_steps: int
+) -> tuple[ca.Function, ca.Function]:
+    """The step and the whole-run ``mapaccum`` function, built once per model and setting and kept."""
+    cache: dict[Any, Any] = model.__dict__.setdefault("_compiled_runs", {})
+    key = (solver, backend, meth.name, stab.project)
+    if key not in cache:
+        assert meth.tableau is not None
+        cache[key] = (_rk_step(model, rhs_function(model, solver, backend), meth.tableau, stab), {})
+    step, runs = cache[key]
+    if n_steps not in runs:
+        runs[n_steps] = step.mapaccum("run", n_steps)
+    return step, runs[n_steps]
 
 
 def _step_by_step(step: ca.Function, y0: np.ndarray, times: np.ndarray, stab: np.ndarray) -> np.ndarray:

@@ -1,0 +1,258 @@
+"""Figures of gausspp.plot (issue 6): each draws what it should and saves a PNG.
+
+The acceptance line "the realizability-map figure shows the true zero set differing from
+n ⟂ l for a non-principal l" is checked on the numbers behind the map.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import gausspp as gp
+
+pytest.importorskip("matplotlib")
+from gausspp import plot  # noqa: E402
+from gausspp.report import Row  # noqa: E402
+
+INERTIA = (1.0, 2.0, 3.0)
+SKEW_L = (1.0, 1.0, 1.0)
+
+
+@pytest.fixture(autouse=True)
+def _close_figures() -> Iterator[None]:
+    yield
+    import matplotlib.pyplot as plt
+
+    plt.close("all")
+
+
+def saved(fig: Any, path: Path) -> Path:
+    fig.savefig(path, dpi=60)
+    assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and path.stat().st_size > 1000
+    return path
+
+
+def tight(scene: gp.scenes.Scene, t_end: float, samples: int = 101) -> gp.Trajectory:
+    return gp.simulate(
+        scene.model,
+        scene.q0,
+        scene.v0,
+        t_end,
+        lam0=scene.lam0,
+        method="DOP853",
+        rtol=1e-12,
+        atol=1e-14,
+        record=np.linspace(0.0, t_end, samples),
+    )
+
+
+@pytest.fixture(scope="module")
+def two_masses() -> dict[str, Any]:
+    rod = gp.scenes.get("two-masses", realization="ideal", k=3.0, v=0.5)
+    servo = gp.scenes.get("two-masses", realization="servo", k=3.0, v=0.5)
+    return {"rod": rod, "servo": servo, "rod_path": tight(rod, 2.0, 201), "servo_path": tight(servo, 2.0, 201)}
+
+
+def labelled(ax: Any) -> list[str]:
+    return [line.get_label() for line in ax.get_lines() if not line.get_label().startswith("_")]
+
+
+# -- trajectories ------------------------------------------------------------------------------------
+def test_trajectory_one_run(two_masses: dict[str, Any], tmp_path: Path) -> None:
+    fig = plot.trajectory(two_masses["rod_path"], title="rod")
+    assert len(fig.axes) == 2
+    q_ax, v_ax = fig.axes
+    assert len(q_ax.get_lines()) == 2 and len(v_ax.get_lines()) == 2
+    np.testing.assert_array_equal(q_ax.get_lines()[1].get_ydata(), two_masses["rod_path"].q[:, 1])
+    assert fig.get_suptitle() == "rod"
+    saved(fig, tmp_path / "trajectory.png")
+
+
+def test_trajectory_several_runs_with_phase_portrait(two_masses: dict[str, Any], tmp_path: Path) -> None:
+    runs = {"rod": two_masses["rod_path"], "servo": two_masses["servo_path"]}
+    fig = plot.trajectory(runs, phase=True, q_labels=["x1", "x2"], v_labels=["v1", "v2"])
+    assert len(fig.axes) == 3
+    assert labelled(fig.axes[0]) == ["x1 (rod)", "x2 (rod)", "x1 (servo)", "x2 (servo)"]
+    phase = fig.axes[2]
+    assert len(labelled(phase)) == 4  # one curve per coordinate and run (start dots unlabelled)
+    curve = phase.get_lines()[0]
+    np.testing.assert_array_equal(curve.get_xdata(), runs["rod"].q[:, 0])
+    np.testing.assert_array_equal(curve.get_ydata(), runs["rod"].v[:, 0])
+    saved(fig, tmp_path / "phase.png")
+
+
+def test_trajectory_bad_input() -> None:
+    body = gp.scenes.get("rigid-body-servo")
+    traj = tight(body, 0.5, 11)
+    with pytest.raises(gp.InputError, match="nq == nv"):
+        plot.trajectory(traj, phase=True)
+    with pytest.raises(gp.ShapeError, match="labels"):
+        plot.trajectory(traj, q_labels=["a"])
+    with pytest.raises(gp.InputError, match="empty"):
+        plot.trajectory({})
+
+
+def test_reaction_over_time(two_masses: dict[str, Any], tmp_path: Path) -> None:
+    fig = plot.reaction_over_time({"rod": two_masses["rod_path"], "servo": two_masses["servo_path"]})
+    u_ax, z_ax, m_ax = fig.axes
+    assert len(fig.axes) == 3
+    assert labelled(u_ax) == ["$u_{1}$ (rod)", "$u_{1}$ (servo)"]
+    np.testing.assert_array_equal(z_ax.get_lines()[0].get_ydata(), two_masses["rod_path"].compulsion)
+    assert m_ax.get_yscale() == "log" and len(m_ax.get_lines()) == 3  # two margins and the warning level
+    saved(fig, tmp_path / "reaction.png")
+
+
+def test_reaction_over_time_flywheel_shows_the_state(tmp_path: Path) -> None:
+    gyro = gp.scenes.get("gyrostat")
+    fig = plot.reaction_over_time(tight(gyro, 1.0, 21))
+    assert labelled(fig.axes[0]) == ["$u_{1}$", "state $\\lambda_{1}$"]
+    saved(fig, tmp_path / "reaction_gyrostat.png")
+
+
+# -- the realizability map (the acceptance line) --------------------------------------------------------
+def test_map_true_zero_set_differs_from_the_naive_circle_for_a_skew_l() -> None:
+    g = plot.realizability_grid(INERTIA, SKEW_L, resolution=1.0)
+    top = g.margin.max()
+    assert top > 0.99  # n ∥ I l is an ideal-like direction: margin 1
+    assert not g.principal
+    # the margin vanishes on the true zero set (I⁻¹n, l) = 0 ...
+    I = np.diag(INERTIA)
+    assert np.abs(g.true_circle @ np.linalg.solve(I, g.l)).max() < 1e-12
+    assert g.true_margin.max() <= 1e-2 * top
+    # ... and not on most of the naive circle n ⟂ l
+    assert np.abs(g.naive_circle @ g.l).max() < 1e-12
+    assert np.median(g.naive_margin) >= 0.05
+    assert np.mean(g.naive_margin > 1e-2 * top) > 0.9
+    # the map's own grid says the same: cells near the true set are dark, near the naive circle mostly not
+    near_true = np.abs(g.n @ g.pole) < 2e-3
+    near_naive = (np.abs(g.n @ g.l) < 2e-3) & ~near_true
+    assert near_true.sum() > 20 and near_naive.sum() > 20
+    assert g.margin[near_true].max() <= 1e-2 * top
+    assert np.median(g.margin[near_naive]) >= 0.05
+
+
+def test_map_circles_coincide_for_a_principal_l() -> None:
+    for l in [(0.0, 0.0, 1.0), (0.0, 2.0, 0.0)]:
+        g = plot.realizability_grid(INERTIA, l, resolution=2.0)
+        assert g.principal
+        assert abs(abs(g.pole @ g.l) - 1.0) < 1e-12
+        assert g.true_margin.max() <= 1e-2 * g.margin.max()
+        assert g.naive_margin.max() <= 1e-2 * g.margin.max()
+
+
+def test_map_margin_is_the_library_margin(rng: np.random.Generator) -> None:
+    """The vectorized margin behind the map equals gp.realizability.margin (A = I, J = lᵀ, D = n)."""
+    I = np.array([[2.0, 0.3, -0.2], [0.3, 1.5, 0.1], [-0.2, 0.1, 1.0]])
+    l = np.array([0.2, 1.0, -0.7])
+    g = plot.realizability_grid(I, l, resolution=5.0)
+    for _ in range(20):
+        i, j = rng.integers(g.lat.size), rng.integers(g.lon.size)
+        n = g.n[i, j]
+        expected = gp.realizability.margin(I, (l / np.linalg.norm(l))[None, :], n[:, None])
+        assert g.margin[i, j] == pytest.approx(expected, abs=1e-12)
+    assert g.true_margin.max() < 1e-12 and np.median(g.naive_margin) > 0.05
+
+
+def test_realizability_map_figure(tmp_path: Path) -> None:
+    fig = plot.realizability_map(INERTIA, SKEW_L, resolution=2.0)
+    assert len(fig.axes) == 2  # the map and its colour bar
+    ax = fig.axes[0]
+    kinds = {type(c).__name__ for c in ax.collections}
+    assert "QuadMesh" in kinds and "QuadContourSet" in kinds
+    contours = [c for c in ax.collections if type(c).__name__ == "QuadContourSet"]
+    assert len(contours) == 2  # the true zero set and the naive circle
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any("true zero set" in t for t in labels) and any("naive" in t for t in labels)
+    assert "not zero" in ax.get_title()
+    saved(fig, tmp_path / "map.png")
+    grid = plot.realizability_grid(INERTIA, (0, 0, 1), resolution=3.0)
+    assert "principal" in plot.realizability_map(grid=grid).axes[0].get_title()
+
+
+def test_realizability_grid_bad_input() -> None:
+    with pytest.raises(gp.InputError, match="positive definite"):
+        plot.realizability_grid((1.0, -2.0, 3.0), SKEW_L)
+    with pytest.raises(gp.ShapeError):
+        plot.realizability_grid(INERTIA, (1.0, 1.0))
+    with pytest.raises(gp.InputError, match="resolution"):
+        plot.realizability_grid(INERTIA, SKEW_L, resolution=0.0)
+
+
+# -- one constraint, three realizations; the skate --------------------------------------------------------
+def test_three_realizations(tmp_path: Path) -> None:
+    runs = plot.three_realizations_runs(t_end=4.0, samples=201)
+    assert set(runs) == {"ideal", "force", "inertial"}
+    l = np.ones(3) / np.sqrt(3.0)
+    I = np.diag(INERTIA)
+    for traj in runs.values():
+        np.testing.assert_allclose(traj.v[0], runs["ideal"].v[0])  # the same initial ω
+        assert np.abs(traj.v @ l).max() < 1e-9  # the same constraint kept
+    ends = np.array([traj.v[-1] for traj in runs.values()])
+    assert min(np.linalg.norm(ends[i] - ends[j]) for i, j in [(0, 1), (0, 2), (1, 2)]) > 0.1  # three motions
+    energy = {k: 0.5 * np.einsum("ti,ij,tj->t", tr.v, I, tr.v) for k, tr in runs.items()}
+    assert np.ptp(energy["ideal"]) < 1e-8 and np.ptp(energy["force"]) > 0.1  # the ideal reaction does no work
+    fig = plot.three_realizations(t_end=4.0, runs=runs)
+    assert len(fig.axes) == 5
+    for ax, key in zip(fig.axes[:3], ["ideal", "force", "inertial"], strict=True):
+        assert len(ax.get_lines()) == 3  # ω₁, ω₂, ω₃
+        np.testing.assert_array_equal(ax.get_lines()[0].get_ydata(), runs[key].v[:, 0])
+        assert ax.get_title() == plot.THREE_LABELS[key]
+    assert len(labelled(fig.axes[3])) == 5 and len(fig.axes[4].get_lines()) == 3
+    saved(fig, tmp_path / "three.png")
+    with pytest.raises(gp.InputError, match="keys"):
+        plot.three_realizations(runs={"ideal": runs["ideal"]})
+
+
+def test_skate(tmp_path: Path) -> None:
+    runs = plot.skate_runs(t_end=4.0, samples=201)
+    non, vak = runs["nonholonomic"], runs["vakonomic"]
+    assert np.hypot(non.q[:, 0], non.q[:, 1] - 1.0).max() == pytest.approx(1.0, abs=1e-8)  # circle of radius v0/ω0
+    assert np.abs(non.q[:, :2] - vak.q[:, :2]).max() > 0.5  # another law, another path
+    fig = plot.skate(runs=runs)
+    plane, heading = fig.axes
+    assert len(fig.axes) == 2
+    assert labelled(plane) == ["nonholonomic (ideal)", "vakonomic", "start"]
+    np.testing.assert_array_equal(plane.get_lines()[1].get_xdata(), vak.q[:, 0])
+    assert len(heading.get_lines()) == 2
+    saved(fig, tmp_path / "skate.png")
+
+
+# -- verification ------------------------------------------------------------------------------------------
+def test_verification_passing_and_failing(two_masses: dict[str, Any], tmp_path: Path) -> None:
+    path = two_masses["rod_path"]
+    good = gp.verify(two_masses["rod"].model, path)
+    bad = gp.verify(two_masses["servo"].model, path)
+    assert good.is_motion and not bad.is_motion
+    fig = plot.verification({"rod model": good, "servo model": bad}, path)
+    assert len(fig.axes) == 4  # δx and multipliers, one column per check
+    top_good, top_bad = fig.axes[0], fig.axes[1]
+    assert "a motion" in top_good.get_title() and "NOT" not in top_good.get_title()
+    assert "NOT a motion" in top_bad.get_title() and f"{bad.relative_gap:.2e}" in top_bad.get_title()
+    assert len(top_bad.get_lines()) == 2  # δx₁, δx₂
+    np.testing.assert_array_equal(top_bad.get_lines()[1].get_ydata(), bad.delta_x[:, 1])
+    assert np.abs(top_bad.get_lines()[0].get_ydata()).max() == 0.0  # the servo's virtual displacements: δx₁ = 0
+    saved(fig, tmp_path / "verification.png")
+    single = plot.verification(bad)
+    assert len(single.axes) == 1 and "NOT a motion" in single.axes[0].get_title()
+    saved(single, tmp_path / "verification_single.png")
+
+
+# -- work-precision -------------------------------------------------------------------------------------------
+def test_work_precision(tmp_path: Path) -> None:
+    def row(method: str, solver: str, err: float, wall: float, status: str = "success") -> Row:
+        return Row("demo", method, solver, "s", err, err, -np.log10(err), "exact", 0, 0, wall, 1, 1, status, "")
+
+    rows = [
+        row(m, s, e, w) for m in ("rk4", "DOP853") for s in ("direct", "qp") for e, w in ((1e-4, 1e-3), (1e-8, 1e-2))
+    ]
+    rows.append(row("Radau", "direct", float("nan"), float("nan"), "failed"))
+    fig = plot.work_precision(rows, "demo")
+    ax = fig.axes[0]
+    assert len(ax.get_lines()) == 4 and ax.get_xscale() == "log" and "1 failed" in ax.get_title()
+    saved(fig, tmp_path / "wp.png")
+    assert [p.name for p in plot.save_work_precision(rows, tmp_path / "out")] == ["work_precision_demo.png"]
