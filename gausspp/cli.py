@@ -1,23 +1,223 @@
-"""Command line: ``gausspp demo`` (the main job) and ``gausspp scenes``.
+"""Command line: ``gausspp demo`` (the main job), ``run``, ``verify``, ``report`` and ``scenes``.
 
-Errors print as one line (the traceback only with ``--debug``); exit codes: 0 success,
-1 a gausspp error, 2 bad usage.
+Exit codes: 0 success; 1 a gausspp error (a value the library rejects, a run that failed midway,
+a file that cannot be written); 2 a malformed command line (unknown command, option, scene,
+method, solver or scene parameter, a parameter value of the wrong type); 130 interrupted.
+Errors print as one line on stderr (the traceback only with ``--debug``).
 """
 
 from __future__ import annotations
 
 import argparse
+import ast
+import inspect
+import io
 import json
 import sys
+import textwrap
+import threading
 import time
-from collections.abc import Sequence
-from typing import Any
+import warnings
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager, redirect_stdout
+from dataclasses import replace
+from pathlib import Path
+from typing import IO, Any, NoReturn
 
 import numpy as np
 
-from . import qp, scenes
-from .errors import GaussppError
+from . import methods, qp, scenes
+from .errors import GaussppError, UnknownNameError
 from .model import Model
+from .trajectory import Trajectory
+
+EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+class UsageError(Exception):
+    """A command line that parses but cannot be meant (unknown parameter, value of the wrong type): exit 2."""
+
+
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
+# -- progress, warnings --------------------------------------------------------------------------
+class _Progress:
+    """Elapsed time on stderr while a long call runs: a spinner line on a terminal, sparse lines otherwise.
+
+    Nothing is shown for calls shorter than ``delay`` seconds. Calls into compiled code that hold
+    the GIL pause the spinner; the elapsed time is right again when they return.
+    """
+
+    _FRAMES = "|/-\\"
+    _LOG_AT = (2.0, 10.0, 30.0, 60.0)  # non-terminal: one line at these elapsed times, then every minute
+
+    def __init__(self, label: str, enabled: bool = True, delay: float = 1.0) -> None:
+        self.label, self.enabled, self.delay = label, enabled, delay
+        self.shown = False
+        self._done = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._stream: IO[str] = sys.stderr
+
+    def __enter__(self) -> _Progress:
+        if self.enabled:
+            self._stream = sys.stderr
+            self._start = time.perf_counter()
+            self._thread = threading.Thread(target=self._loop, daemon=True)
+            self._thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self._done.set()
+        if self._thread is not None:
+            self._thread.join()
+        if self.shown:
+            if self._tty():
+                self._stream.write("\r\033[K")
+            else:
+                self._stream.write(f"gausspp: {self.label}: done in {time.perf_counter() - self._start:.1f} s\n")
+            self._stream.flush()
+
+    def _tty(self) -> bool:
+        try:
+            return bool(self._stream.isatty())
+        except (AttributeError, ValueError):
+            return False
+
+    def _loop(self) -> None:
+        if self._done.wait(self.delay):
+            return
+        tty, frame, marks = self._tty(), 0, list(self._LOG_AT)
+        while not self._done.is_set():
+            elapsed = time.perf_counter() - self._start
+            if tty:
+                self._stream.write(f"\r{self._FRAMES[frame % 4]} {self.label} … {elapsed:.1f} s")
+                self._stream.flush()
+                self.shown, frame = True, frame + 1
+            elif elapsed >= marks[0]:
+                self._stream.write(f"gausspp: {self.label} … {elapsed:.0f} s\n")
+                self._stream.flush()
+                self.shown = True
+                marks = marks[1:] or [marks[0] + 60.0]
+            self._done.wait(0.2)
+
+
+@contextmanager
+def _warnings_as_lines() -> Iterator[None]:
+    """Show warnings raised inside as one line each on stderr (``gausspp: warning: ...``), once per message."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            yield
+        finally:
+            seen: set[str] = set()
+            for w in caught:
+                line = _one_line(w.message)
+                if line not in seen:
+                    seen.add(line)
+                    print(f"gausspp: warning: {w.category.__name__}: {line}", file=sys.stderr)
+
+
+# -- scene parameters ------------------------------------------------------------------------------
+def _scene_parameters(name: str) -> dict[str, inspect.Parameter]:
+    """The keyword parameters of the scene's builder (those of the module's ``build`` behind a ``**params`` wrapper)."""
+    builder = scenes._builder(name)
+    sig, fixed = inspect.signature(builder), set()
+    if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
+        base = getattr(sys.modules[builder.__module__], "build", None)
+        if base is not None and base is not builder:
+            sig = inspect.signature(base)
+            try:  # keywords the wrapper passes itself (``build(law="rate", **params)``) are not the user's
+                tree = ast.parse(textwrap.dedent(inspect.getsource(builder)))
+                fixed = {kw.arg for kw in ast.walk(tree) if isinstance(kw, ast.keyword) and kw.arg}
+            except (OSError, TypeError, SyntaxError):
+                pass
+    return {
+        k: p
+        for k, p in sig.parameters.items()
+        if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY) and k not in fixed
+    }
+
+
+def _annotation(param: inspect.Parameter) -> set[str]:
+    """The parameter's type as a set of names (``"float | None"`` → {"float", "None"}); from the default if bare."""
+    ann = param.annotation
+    if ann is inspect.Parameter.empty:
+        default = param.default
+        return {type(default).__name__} if isinstance(default, (bool, int, float, str)) else set()
+    text = ann if isinstance(ann, str) else getattr(ann, "__name__", str(ann))
+    return {part.strip() for part in text.split("|")}
+
+
+def _parse_value(option: str, key: str, text: str, param: inspect.Parameter) -> Any:
+    """``text`` as a Python literal (number, tuple, None, …), a plain string otherwise; checked against the type."""
+    try:
+        value: Any = ast.literal_eval(text)
+    except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
+        value = text
+    kinds = _annotation(param)
+    if kinds == {"str"}:
+        return value if isinstance(value, str) else text
+    if kinds & {"float", "int"}:
+        if value is None and "None" in kinds:
+            return None
+        if isinstance(value, str):
+            try:
+                value = float(value)  # inf, nan
+            except ValueError:
+                pass
+        wanted = "an integer" if "float" not in kinds else "a number"
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise UsageError(
+                f"{option} {key}={text}: {key} must be {wanted}"
+                + (" or None" if "None" in kinds else "")
+                + f", got {text!r}"
+            )
+        if "float" not in kinds:
+            if not float(value).is_integer():
+                raise UsageError(f"{option} {key}={text}: {key} must be an integer, got {text!r}")
+            return int(value)
+        return float(value)
+    return value
+
+
+def _parse_params(scene: str, items: Sequence[str] | None, option: str = "--param") -> dict[str, Any]:
+    """``["k=v", ...]`` → keyword arguments of the scene's builder (names and value types checked)."""
+    known = _scene_parameters(scene)
+    params: dict[str, Any] = {}
+    for item in items or []:
+        key, sep, text = item.partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise UsageError(f"{option} {item!r}: expected KEY=VALUE, e.g. {option} t_end=2")
+        if key not in known:
+            raise UsageError(
+                f"{option} {key}: scene {scene!r} has no parameter {key!r}; its parameters: {', '.join(known)}"
+            )
+        params[key] = _parse_value(option, key, text.strip(), known[key])
+    return params
+
+
+def _build(name: str, params: dict[str, Any]) -> scenes.Scene:
+    try:
+        return scenes.get(name, **params)
+    except GaussppError:
+        raise
+    except (TypeError, ValueError) as exc:  # a value the builder could not use, not caught by the library
+        raise GaussppError(f"scene {_label(name, params)}: {_one_line(exc)}") from exc
+
+
+def _label(name: str, params: dict[str, Any]) -> str:
+    return name + (" (" + ", ".join(f"{k}={v!r}" for k, v in params.items()) + ")" if params else "")
+
+
+def _realizations(model: Model) -> str:
+    return ", ".join(f"{n}: {c.realization.label}" for n, c in zip(model.names, model.constraints, strict=True))
+
+
+def _vector(x: np.ndarray) -> str:
+    return np.array2string(np.asarray(x), precision=8, separator=", ", max_line_width=200, suppress_small=False)
 
 
 def _time_per_step(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, solver: str) -> float:
@@ -162,23 +362,473 @@ def report(args: argparse.Namespace) -> int:
     return 0
 
 
+# -- run -----------------------------------------------------------------------------------------
+def _simulate(
+    args: argparse.Namespace, scene: scenes.Scene, label: str, *, every_step: bool = False
+) -> tuple[Trajectory, float, float | None]:
+    """Simulate ``scene`` as the command line says: the trajectory, the wall time in s, the ``dt`` used.
+
+    Recording: about ``--samples`` intervals — uniform times by dense output for adaptive methods
+    (or, with ``every_step``, every accepted step with ``T/samples`` as the largest step), every
+    k-th step for fixed-step ones.
+    """
+    from .simulate import simulate
+
+    meth = methods.get(args.method)
+    t_end = scene.t_end if args.t_end is None else args.t_end
+    solver, backend = getattr(args, "solver", None), getattr(args, "backend", None)
+    if solver is None:  # CVODES differentiates the right-hand side: the direct step only
+        solver = "direct" if meth.name == "cvodes" else "qp"
+    elif meth.name == "cvodes" and solver != "direct":
+        raise UsageError("--method cvodes needs --solver direct (CVODES differentiates the right-hand side)")
+    stabilize = getattr(args, "stabilize", "none")
+    dt: float | None = args.dt
+    record: Any = 1
+    if meth.adaptive:
+        if every_step:
+            dt, record = dt or t_end / args.samples, 1
+        else:
+            record = np.linspace(0.0, t_end, args.samples + 1)
+    else:
+        dt = dt or t_end / 2000
+        record = max(int(np.ceil(t_end / dt - 1e-9)) // args.samples, 1)
+    if backend is not None:
+        if solver == "direct":
+            raise UsageError("--backend applies to --solver qp only")
+        try:  # unknown or unavailable backends fail here, naming the valid ones (probing them prints banners)
+            with redirect_stdout(io.StringIO()):
+                qp.get(backend)
+        except UnknownNameError as exc:
+            raise UsageError(f"--backend {backend}: {exc}") from None
+    with _Progress(label, enabled=not args.quiet), _warnings_as_lines():
+        start = time.perf_counter()
+        traj = simulate(
+            scene.model,
+            scene.q0,
+            scene.v0,
+            t_end,
+            lam0=scene.lam0,
+            dt=dt,
+            method=meth.name,
+            solver=solver,
+            backend=backend,
+            stabilize=None if stabilize == "none" else stabilize,
+            rtol=args.rtol,
+            atol=args.atol,
+            record=record,
+            throw=False,
+        )
+        wall = time.perf_counter() - start
+    return traj, wall, dt
+
+
+def _thin(traj: Trajectory, gap: float) -> Trajectory:
+    """Drop samples closer than ``gap`` to the previous kept one (the last sample is kept).
+
+    Adaptive integrators can end on a step of round-off size; such near-duplicate nodes spoil the
+    spline that (23) differentiates.
+    """
+    t, keep = traj.t, [0]
+    for i in range(1, t.size):
+        if t[i] - t[keep[-1]] >= gap:
+            keep.append(i)
+    if t.size and keep[-1] != t.size - 1:
+        keep[-1] = t.size - 1
+    if len(keep) == t.size:
+        return traj
+    idx = np.array(keep)
+    fields = {
+        k: getattr(traj, k)[idx]
+        for k in traj.__dataclass_fields__
+        if isinstance(getattr(traj, k), np.ndarray) and getattr(traj, k).shape[:1] == t.shape
+    }
+    return replace(traj, **fields)
+
+
+def _summary(scene: scenes.Scene, traj: Trajectory, wall: float, dt: float | None, rtol: float) -> list[str]:
+    adaptive = methods.get(traj.method).adaptive
+    setting = f"rtol {rtol:g}" if adaptive else f"dt {dt:g}"
+    rows = [
+        ("realizations", _realizations(scene.model)),
+        ("method", f"{traj.method} ({setting}) · step by {traj.solver}"),
+        ("status", traj.status + (f" — {_one_line(traj.message)}" if traj.message else "")),
+        ("steps", f"{traj.steps} steps, {len(traj)} samples, {traj.rhs_evaluations} step evaluations, {wall:.3g} s"),
+    ]
+    if len(traj):
+        rows.append(("time", f"t = {traj.t[0]:g} → {traj.t[-1]:.6g}"))
+        rows.append(("final q", _vector(traj.q[-1])))
+        rows.append(("final v", _vector(traj.v[-1])))
+        if traj.lam.shape[1]:
+            rows.append(("final λ", _vector(traj.lam[-1])))
+        rows.append(("final u", _vector(traj.u[-1])))
+        rows.append(("max |Φ|, |g|", f"{traj.max_residual():.2e}"))
+        balance = np.abs(traj.energy_balance())
+        rows.append(
+            (
+                "energy balance",
+                f"{np.nanmax(balance):.2e} (largest |ΔE − W_reaction − W_forces|)"
+                if np.isfinite(balance).any()
+                else "— (the model does not know its energy or its forces' power)",
+            )
+        )
+        if traj.margin.size:
+            rows.append(("margin", f"{traj.margin.min():.4g} … {traj.margin.max():.4g} (realizability, σ_min of S)"))
+        if scene.exact is not None and traj.success:
+            q_ex, v_ex = scene.exact(float(traj.t[-1]))
+            err = float(np.abs(np.concatenate([traj.q[-1] - q_ex, traj.v[-1] - v_ex])).max())
+            rows.append(("vs exact", f"{err:.2e} (largest final-state error against the known motion)"))
+    return [f"  {k:15s} {v}" for k, v in rows]
+
+
+def _energy_balance(traj: Trajectory) -> np.ndarray:
+    return traj.energy_balance() if len(traj) else np.zeros(0)
+
+
+def _columns(traj: Trajectory) -> tuple[list[str], np.ndarray]:
+    """The trajectory as named columns (for CSV)."""
+    names, blocks = ["t"], [traj.t[:, None]]
+    for key in ("q", "v", "lam", "a", "u", "residual", "g"):
+        arr = getattr(traj, key)
+        names += [f"{key}{i + 1}" for i in range(arr.shape[1])]
+        blocks.append(arr)
+    for key in ("margin", "compulsion", "energy", "work_reaction", "work_forces"):
+        arr = getattr(traj, key)
+        if arr.size == traj.t.size:
+            names.append(key)
+            blocks.append(arr[:, None])
+    names.append("energy_balance")
+    blocks.append(_energy_balance(traj)[:, None])
+    return names, np.hstack(blocks) if traj.t.size else np.zeros((0, len(names)))
+
+
+def _write_trajectory(traj: Trajectory, scene: scenes.Scene, params: dict[str, Any], out: Path) -> list[Path]:
+    """``<scene>.npz`` (every array and the run's metadata), ``<scene>.csv`` and, with matplotlib, ``<scene>.png``."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        base = out / scene.name
+        arrays = {k: np.asarray(getattr(traj, k)) for k in traj.__dataclass_fields__ if k not in ("status", "message")}
+        meta = dict(scene=scene.name, params=json.dumps(params, default=repr), status=traj.status, message=traj.message)
+        np.savez(base.with_suffix(".npz"), energy_balance=_energy_balance(traj), **arrays, **meta)  # type: ignore[arg-type]
+        names, data = _columns(traj)
+        np.savetxt(base.with_suffix(".csv"), data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+        files = [base.with_suffix(".npz"), base.with_suffix(".csv")]
+    except OSError as exc:
+        raise GaussppError(f"cannot write to {out}: {exc.strerror or exc}") from exc
+    if len(traj):
+        png = _plot_trajectory(traj, f"{_label(scene.name, params)} · {traj.method} · {traj.status}", base)
+        if png is not None:
+            files.append(png)
+    return files
+
+
+def _plot_trajectory(traj: Trajectory, title: str, base: Path) -> Path | None:
+    """q(t) and v(t) as a PNG (``gausspp.plot.trajectory`` if there is one); None without matplotlib."""
+    from . import plot
+
+    try:
+        plt = plot._pyplot()
+    except GaussppError as exc:
+        print(f"(no plot: {exc})")
+        return None
+    drawer = getattr(plot, "trajectory", None)
+    if drawer is not None and "title" in inspect.signature(drawer).parameters:
+        fig = drawer(traj, title=title)
+    elif drawer is not None:
+        fig = drawer(traj)
+        fig.suptitle(title, fontsize=9)
+    else:
+        fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7, 5))
+        for ax, key, sym in ((axes[0], "q", "q"), (axes[1], "v", "v")):
+            arr = getattr(traj, key)
+            for i in range(arr.shape[1]):
+                ax.plot(traj.t, arr[:, i], label=f"{sym}{i}")
+            ax.set_ylabel(sym)
+            ax.grid(True, alpha=0.3)
+            ax.legend(fontsize=7, ncol=min(arr.shape[1], 6), loc="best")
+        axes[1].set_xlabel("t")
+        fig.suptitle(title, fontsize=9)
+    path = base.with_suffix(".png")
+    try:
+        fig.savefig(path, dpi=110, bbox_inches="tight")
+    except OSError as exc:
+        raise GaussppError(f"cannot write {path}: {exc.strerror or exc}") from exc
+    finally:
+        plt.close(fig)
+    return path
+
+
+def run(args: argparse.Namespace) -> int:
+    """Simulate one scene, print a summary, optionally write the trajectory (NPZ, CSV, PNG)."""
+    params = _parse_params(args.scene, args.param)
+    scene = _build(args.scene, params)
+    traj, wall, dt = _simulate(args, scene, f"simulating {args.scene}")
+    print(_label(scene.name, params))
+    print("\n".join(_summary(scene, traj, wall, dt, args.rtol)))
+    if args.out is not None:
+        files = _write_trajectory(traj, scene, params, Path(args.out))
+        print(f"  {'written':15s} {', '.join(str(f) for f in files)}")
+    if not traj.success:
+        raise GaussppError(f"the run failed: {_one_line(traj.message)}")
+    return EXIT_OK
+
+
+# -- verify -------------------------------------------------------------------------------------
+def verify(args: argparse.Namespace) -> int:
+    """Simulate a scene, then decide by (23) whether the path is a motion of its model (or of another)."""
+    from .integral import verify as check
+
+    params = _parse_params(args.scene, args.param)
+    check_params = _parse_params(args.scene, args.check_param, "--check-param")
+    scene = _build(args.scene, params)
+    model = _build(args.scene, {**params, **check_params}).model if check_params else scene.model
+    traj, wall, dt = _simulate(args, scene, f"simulating {args.scene}", every_step=True)
+    t_end = scene.t_end if args.t_end is None else args.t_end
+    traj = _thin(traj, 0.05 * t_end / args.samples)
+    print(f"path:     {_label(scene.name, params)} — {_realizations(scene.model)}")
+    setting = f"rtol {args.rtol:g}" if methods.get(traj.method).adaptive else f"dt {dt:g}"
+    reached = f" to t = {traj.t[-1]:.6g}" if len(traj) else ""
+    print(f"          {traj.method} ({setting}), {len(traj)} samples{reached}, {wall:.3g} s")
+    if not traj.success:
+        raise GaussppError(f"the simulation failed, nothing to verify: {_one_line(traj.message)}")
+    target = _label(scene.name, {**params, **check_params}) if check_params else "the same model"
+    print(f"model:    {target} — {_realizations(model)}")
+    with _Progress("verifying by (23)", enabled=not args.quiet), _warnings_as_lines():
+        start = time.perf_counter()
+        result = check(model, traj)
+        wall = time.perf_counter() - start
+    worst = int(np.argmax(np.abs(result.delta_x).max(axis=1))) if result.delta_x.size else 0
+    lines = [
+        ("relative gap", f"{result.relative_gap:.3e}  (on every other node: {result.coarse_relative_gap:.3e})"),
+        ("tolerance", f"{result.tolerance:.3e}"),
+        ("verification", f"{result.t.size} nodes, {wall:.3g} s"),
+    ]
+    if not result.is_motion:
+        lines.append(("largest δx", f"at t = {result.t[worst]:.6g}: {_vector(result.delta_x[worst])}"))
+    for key, value in lines:
+        print(f"  {key:14s} {value}")
+    verdict = "a motion of the model" if result.is_motion else "NOT a motion of the model"
+    reason = (
+        "(relative gap ≤ tolerance)"
+        if result.is_motion
+        else "(relative gap > tolerance: the reaction does work on an admissible variation δx)"
+    )
+    print(f"verdict:  {verdict} {reason}")
+    if args.expect is not None and (args.expect == "motion") != result.is_motion:
+        raise GaussppError(f"expected {args.expect.replace('-', ' ')}, but the verdict is: {verdict}")
+    return EXIT_OK
+
+
+# -- scenes ---------------------------------------------------------------------------------------
 def list_scenes(args: argparse.Namespace) -> int:
-    """Print every scene with a one-line description."""
-    for name, line in scenes.describe().items():
-        print(f"{name:20s} {line}")
-    return 0
+    """Every scene with a one-line description, or one scene's description and parameters."""
+    if args.name is None:
+        for name, line in scenes.describe().items():
+            print(f"{name:20s} {line}")
+        return EXIT_OK
+    builder = scenes._builder(args.name)
+    print(f"{args.name}: {inspect.getdoc(builder)}\n\nparameters (gausspp run {args.name} --param KEY=VALUE):")
+    for key, param in _scene_parameters(args.name).items():
+        ann = param.annotation
+        kind = ann if isinstance(ann, str) else " | ".join(sorted(_annotation(param))) or "any"
+        print(f"  {key:16s} {kind:14s} default {param.default!r}")
+    return EXIT_OK
+
+
+# -- the parser ---------------------------------------------------------------------------------------
+class _Parser(argparse.ArgumentParser):
+    """argparse with usage errors as one line (``gausspp: error: ...``) and exit code 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(EXIT_USAGE, f"gausspp: error: {_one_line(message)} (see '{self.prog} --help')\n")
+
+
+def _common() -> _Parser:
+    """Options every subcommand accepts too (after its name); absent there, the top-level value stands."""
+    common = _Parser(add_help=False)
+    common.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help="show tracebacks")
+    common.add_argument(
+        "--quiet", action="store_true", default=argparse.SUPPRESS, help="no progress indication on stderr"
+    )
+    return common
+
+
+def _positive(kind: type) -> Any:
+    """An argparse type: a positive finite number of ``kind``."""
+
+    def parse(text: str) -> Any:
+        try:
+            value = kind(text)
+        except ValueError:
+            value = None
+        if value is None or not (value > 0 and np.isfinite(value)):
+            raise argparse.ArgumentTypeError(
+                f"expected a positive {'integer' if kind is int else 'number'}, got {text!r}"
+            )
+        return value
+
+    return parse
+
+
+def _simulation_options(p: argparse.ArgumentParser, rtol: float, samples: int) -> None:
+    p.add_argument("scene", metavar="SCENE", choices=scenes.names(), help="a scene (see `gausspp scenes`)")
+    p.add_argument(
+        "-p",
+        "--param",
+        action="append",
+        metavar="KEY=VALUE",
+        help="a scene parameter, repeatable; VALUE is a Python literal (2.5, (1, 0, 0), None) or a word "
+        "(servo); see `gausspp scenes SCENE` for the parameters",
+    )
+    p.add_argument(
+        "--method",
+        default="DOP853",
+        choices=methods.names(),
+        metavar="METHOD",
+        help=f"integration method, one of {', '.join(methods.names())} (default: DOP853)",
+    )
+    p.add_argument("--t-end", type=_positive(float), metavar="T", help="final time (default: the scene's)")
+    p.add_argument(
+        "--dt",
+        type=_positive(float),
+        metavar="DT",
+        help="step of fixed-step methods (default: T/2000); largest step of adaptive ones",
+    )
+    p.add_argument(
+        "--rtol",
+        type=_positive(float),
+        default=rtol,
+        metavar="R",
+        help=f"relative tolerance of adaptive methods (default: {rtol:g})",
+    )
+    p.add_argument(
+        "--atol",
+        type=_positive(float),
+        default=1e-12,
+        metavar="A",
+        help="absolute tolerance of adaptive methods (default: 1e-12)",
+    )
+    p.add_argument(
+        "--samples",
+        type=_positive(int),
+        default=samples,
+        metavar="N",
+        help="record about N intervals: uniform times for adaptive methods, every k-th step otherwise "
+        f"(default: {samples})",
+    )
+
+
+_EXIT_CODES = """\
+exit codes: 0 success, 1 gausspp error or failed run, 2 bad command line."""
+
+_EPILOG = (
+    """\
+examples:
+  gausspp demo
+  gausspp scenes two-masses
+  gausspp run two-masses --param realization=servo --out results
+  gausspp verify two-masses --param realization=ideal --check-param realization=servo
+
+"""
+    + _EXIT_CODES
+)
+
+_RUN = """\
+Simulate SCENE and print a summary: status, steps, final state, constraint
+residual, energy balance, realizability margin (and the error against the
+exact motion where the scene knows it). With --out DIR, write DIR/SCENE.npz
+(every array and the run's metadata), DIR/SCENE.csv and DIR/SCENE.png. A run
+that fails midway still writes what it computed, then exits with 1.
+
+examples:
+  gausspp run two-masses --param realization=servo --param F=1
+  gausspp run rigid-body-servo -p "n=(1, 0.2, 0)" --method rk4 --dt 1e-3 --out results
+  gausspp run skate -p realization=vakonomic --solver direct"""
+
+_VERIFY = """\
+Simulate SCENE (DOP853 with tight tolerances by default), then decide by the
+integral principle (23) whether the path is a motion of the scene's model —
+or, with --check-param, of the same scene built with other parameters (another
+realization of the same constraint, say). Prints the relative gap, the
+tolerance and the verdict; exit 0 when the verification ran, whatever the
+verdict, unless --expect says otherwise.
+
+examples:
+  gausspp verify two-masses
+  gausspp verify two-masses --param realization=ideal --check-param realization=servo
+  gausspp verify skate --check-param realization=vakonomic --expect not-motion"""
 
 
 def _parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="gausspp", description=__doc__.splitlines()[0])
+    common = _common()
+    parser = _Parser(
+        prog="gausspp",
+        description="Constrained mechanics by Gauss's principle of least constraint, with servo-constraints.",
+        epilog=_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
-    sub = parser.add_subparsers(dest="command", required=True)
-    sub.add_parser("demo", help="the main job: scenes solved by QP and direct, a table").set_defaults(func=demo)
-    sub.add_parser("scenes", help="list the scenes").set_defaults(func=list_scenes)
-    rep = sub.add_parser("report", help="error against run time for every scene, method and solver")
+    parser.add_argument("--quiet", action="store_true", help="no progress indication on stderr")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    sub.add_parser("demo", parents=[common], help="the main job: scenes solved by QP and direct, a table").set_defaults(
+        func=demo
+    )
+    sc = sub.add_parser(
+        "scenes",
+        parents=[common],
+        help="list the scenes, or show one scene's parameters",
+        description="List the scenes with a one-line description, or show one scene's description and parameters.",
+    )
+    sc.add_argument("name", nargs="?", metavar="SCENE", choices=scenes.names(), help="show this scene's parameters")
+    sc.set_defaults(func=list_scenes)
+
+    r = sub.add_parser(
+        "run",
+        parents=[common],
+        help="simulate a scene: a summary, and the trajectory as files with --out",
+        description=_RUN,
+        epilog=_EXIT_CODES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _simulation_options(r, rtol=1e-9, samples=500)
+    r.add_argument(
+        "--solver",
+        choices=("qp", "direct"),
+        help="each step by the Gauss QP or the direct formula (default: qp; direct for cvodes)",
+    )
+    r.add_argument(
+        "--backend",
+        metavar="B",
+        help=f"QP backend for --solver qp (default: {qp.DEFAULT}); e.g. casadi:osqp, qpsolvers:daqp",
+    )
+    r.add_argument(
+        "--stabilize", choices=("none", "project", "baumgarte"), default="none", help="drift control (default: none)"
+    )
+    r.add_argument("--out", metavar="DIR", help="write the trajectory to DIR (NPZ, CSV and, with matplotlib, PNG)")
+    r.set_defaults(func=run)
+
+    v = sub.add_parser(
+        "verify",
+        parents=[common],
+        help="simulate a scene and decide by (23) whether the path is a motion",
+        description=_VERIFY,
+        epilog=_EXIT_CODES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    _simulation_options(v, rtol=1e-10, samples=400)
+    v.add_argument(
+        "-c",
+        "--check-param",
+        action="append",
+        metavar="KEY=VALUE",
+        help="build the model to check against with this parameter changed (repeatable)",
+    )
+    v.add_argument("--expect", choices=("motion", "not-motion"), help="exit with 1 if the verdict is not this")
+    v.set_defaults(func=verify)
+
+    rep = sub.add_parser("report", parents=[common], help="error against run time for every scene, method and solver")
     rep.add_argument("--stability", action="store_true", help="run the stability study instead")
     rep.add_argument("--full", action="store_true", help="finer sweeps (and full-size stability cases)")
-    rep.add_argument("--scenes", nargs="*", help="only these scenes")
+    rep.add_argument("--scenes", nargs="*", metavar="SCENE", choices=scenes.names(), help="only these scenes")
     rep.add_argument("--repeats", type=int, default=2, help="timing repeats (the minimum is kept)")
     rep.add_argument("--out", default="report", help="directory for CSV/JSON and plots (default: report/)")
     rep.add_argument("--verbose", action="store_true", help="progress on stderr")
@@ -187,15 +837,36 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``gausspp`` command."""
-    args = _parser().parse_args(argv)
+    """Entry point of the ``gausspp`` command: the exit code (0 ok, 1 error or failed run, 2 usage)."""
+    try:
+        args = _parser().parse_args(argv)
+    except SystemExit as exc:  # --help (0) or a usage error (2), already printed
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
     try:
         return int(args.func(args))
+    except UsageError as exc:
+        if args.debug:
+            raise
+        print(f"gausspp: error: {_one_line(exc)} (see 'gausspp {args.command} --help')", file=sys.stderr)
+        return EXIT_USAGE
     except GaussppError as exc:
         if args.debug:
             raise
-        print(f"gausspp: error: {exc}", file=sys.stderr)
-        return 1
+        print(f"gausspp: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_ERROR
+    except KeyboardInterrupt:
+        if args.debug:
+            raise
+        print("gausspp: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # not foreseen by the library: still one line, the traceback with --debug
+        if args.debug:
+            raise
+        print(
+            f"gausspp: error: {type(exc).__name__}: {_one_line(exc)} (unexpected: run with --debug for the traceback)",
+            file=sys.stderr,
+        )
+        return EXIT_ERROR
 
 
 if __name__ == "__main__":

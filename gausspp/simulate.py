@@ -100,6 +100,13 @@ def simulate(
         raise InputError(f"solver={solver!r} is unknown; use 'qp' or 'direct'")
     if solver == "direct" and backend is not None:
         raise InputError(f"backend={backend!r} applies to solver='qp' only")
+    if meth.name == "cvodes" and solver != "direct":
+        raise InputError("method='cvodes' needs solver='direct': CVODES differentiates the right-hand side")
+    if meth.lane == "compiled" and solver == "qp" and not qp.get(backend).compiled:
+        raise InputError(
+            f"the compiled lane needs the step inside the casadi graph: use solver='direct' or a casadi QP "
+            f"backend (casadi:qrqp, casadi:daqp, casadi:osqp, ...), not {backend!r}"
+        )
     stab = as_stabilization(stabilize, dt)
     q, v, lam = _initial_state(model, t0, q0, v0, lam0)
     if stab.project:

@@ -8,6 +8,7 @@ the direct solution needs.
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import functools
 import os
 import sys
@@ -54,8 +55,16 @@ def stdout_silenced() -> Iterator[None]:
         try:
             yield
         finally:
+            _flush_c_stdout()  # C's stdio buffers what the plugin printed: flush it into /dev/null
             os.dup2(saved, fd)
             os.close(saved)
+
+
+def _flush_c_stdout() -> None:
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):  # no C library to reach: nothing buffered there to worry about
+        pass
 
 
 @functools.cache

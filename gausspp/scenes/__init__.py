@@ -48,7 +48,9 @@ def get(name: str, **params: Any) -> Scene:
         raise UnknownNameError(f"scene {name!r} is unknown; available: {names()}")
     try:
         return _builder(name)(**params)
-    except TypeError as exc:
+    except InputError:
+        raise
+    except (TypeError, ValueError) as exc:  # a parameter of the wrong kind, e.g. n='abc'
         raise InputError(f"scene {name!r}: {exc}") from None
 
 
