@@ -101,7 +101,11 @@ class PythonQPKernel:
         """Re-evaluate on the values now in ``inputs``."""
         b = self._build
         b.eval()
-        u, y = self.backend.solve(b.output(0), b.output(1), b.output(2))
+        H, S, rhs = b.output(0), b.output(1), b.output(2)
+        if np.isfinite(S.sum() + rhs.sum()):
+            u, y = self.backend.solve(H, S, rhs)
+        else:  # a singular or non-finite step: no QP to pose; the checks diagnose the NaN that follows
+            u, y = np.full(H.shape[0], np.nan), np.full(S.shape[0], np.nan)
         _load(self._finish.args, [*self.inputs, u, y])
         self._finish.eval()
 

@@ -140,6 +140,9 @@ def simulate(
         return traj
     traj = _failed(traj, failure)
     if throw:
+        hint = traj.message.partition(" [smallest realizability margin")[2]
+        if hint:  # the same pointer at a small margin as in the returned trajectory
+            failure.args = (f"{failure} [smallest realizability margin{hint}",)
         failure.trajectory = traj  # type: ignore[attr-defined]
         raise failure
     return traj
@@ -173,12 +176,23 @@ def _project_initial(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Newton steps of the projection until ``g`` and ``Φ`` are within ``tol/1000`` (or fail clearly)."""
     project = _project(model)
+    start, first_move = q.copy(), None
     for _ in range(max_steps):
         g, Phi = _residuals(model, t, q, v, lam)
         size = float(np.max(np.abs(np.concatenate([g, Phi]))))
         if size <= tol * 1e-3:
+            moved = float(np.max(np.abs(q - start)))
+            if first_move is not None and moved > 10 * first_move + 1e-12:
+                raise InitialDataError(
+                    f"projecting the initial data onto the constraints ended far from them at t={t:.6g} (q moved by "
+                    f"{moved:.3g}, the first Newton step by {first_move:.3g}): Newton found a distant root; start "
+                    "closer to the constraint"
+                )
             return q, v
+        q_prev = q
         q, v = project(t, q, v, lam)
+        if first_move is None:
+            first_move = float(np.max(np.abs(q - q_prev))) if np.all(np.isfinite(q)) else np.inf
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
             raise InitialDataError(
                 f"projecting the initial data onto the constraints failed at t={t:.6g} (NaN): the constraint rows are "

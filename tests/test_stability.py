@@ -1,6 +1,6 @@
 """The stability study (DESIGN §6.6, issue 5 item 3): each case's verdict and its key figures.
 
-The study runs once per module (``run(quick=True)``, a few seconds). Cases whose verdict is ✗
+The study runs once per module (``run(quick=True)``, about ten seconds). Cases whose verdict is ✗
 (the library does something wrong there) have a test of what is *right*, marked
 ``xfail(strict=True)`` with the library problem as reason: it turns into a failure as soon as
 the library is fixed, so the mark (and the study's verdict) must then be revisited.
@@ -19,7 +19,7 @@ import pytest
 
 import gausspp as gp
 from gausspp import stability
-from gausspp.stability import Case
+from gausspp.stability import Case, crane, margins, redundant
 
 EPS = float(np.finfo(float).eps)
 
@@ -27,6 +27,10 @@ EPS = float(np.finfo(float).eps)
 @pytest.fixture(scope="module")
 def cases() -> dict[str, Case]:
     return {c.name: c for c in stability.run(quick=True)}
+
+
+def _realizability_warned(caught: list[warnings.WarningMessage]) -> bool:
+    return any(issubclass(w.category, gp.RealizabilityWarning) for w in caught)
 
 
 # -- the study as a whole ------------------------------------------------------------------------
@@ -84,6 +88,7 @@ def test_a_case_that_raises_becomes_a_failed_case(monkeypatch: pytest.MonkeyPatc
     assert len(result) == 7
     failed = result[3]
     assert failed.name == "long horizon" and failed.verdict is False
+    assert failed.what and failed.expected  # a crashed case still says what it is about
     assert "ZeroDivisionError: boom" in failed.observed and failed.figures["crashed"] == 1.0
 
 
@@ -105,7 +110,7 @@ def test_stiff_chain_stiff_method_needs_ten_times_fewer_evaluations(cases: dict[
 
 @pytest.mark.slow
 def test_stiff_chain_full() -> None:
-    c = stability.case_stiff_chain(quick=False)
+    c = stability.stiff_chain.case(quick=False)
     assert c.verdict, c.observed
     assert c.figures["t_end"] == 10.0
     assert c.figures["evaluation_ratio@1e10"] >= 10.0 and c.figures["radau_error@1e10"] <= 1e-6
@@ -127,7 +132,7 @@ def test_mass_ratios_agree_within_eps_times_condition_number(cases: dict[str, Ca
 
 @pytest.mark.slow
 def test_mass_ratios_full() -> None:
-    c = stability.case_mass_ratios(quick=False)
+    c = stability.mass_ratios.case(quick=False)
     assert c.verdict, c.observed
     assert c.figures["steps_checked"] == 13 * 4 * 4
 
@@ -149,13 +154,13 @@ def test_margin_1e9_warns_and_below_margin_error_raises() -> None:
     s = gp.scenes.get("crane", M0=1.0, m=0.5, L=1.0, theta0=-0.3, distance=0.0)
     for solver in ("direct", "qp"):
         with pytest.warns(gp.RealizabilityWarning, match=r"realizability margin 1e-09 at t=0\.5"):
-            res = s.model.step(0.5, [0.1, stability._theta_for_margin(1e-9)], [0.3, 0.2], solver=solver)
+            res = s.model.step(0.5, [0.1, margins.theta_for_margin(1e-9)], [0.3, 0.2], solver=solver)
         assert res.margin == pytest.approx(1e-9, rel=1e-6)
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # margin 1e-5: no warning at all
-            s.model.step(0.5, [0.1, stability._theta_for_margin(1e-5)], [0.3, 0.2], solver=solver)
+            s.model.step(0.5, [0.1, margins.theta_for_margin(1e-5)], [0.3, 0.2], solver=solver)
         with pytest.raises(gp.RealizabilityError, match=r"'payload follows s\(t\)'.*t=0\.5") as info:
-            s.model.step(0.5, [0.1, stability._theta_for_margin(1e-13)], [0.3, 0.2], solver=solver)
+            s.model.step(0.5, [0.1, margins.theta_for_margin(1e-13)], [0.3, 0.2], solver=solver)
         assert info.value.margin < 1e-12
 
 
@@ -173,76 +178,119 @@ def test_long_horizon_projection_holds_and_raw_drift_grows(cases: dict[str, Case
 
 @pytest.mark.slow
 def test_long_horizon_full_million_steps() -> None:
-    c = stability.case_long_horizon(quick=False)
+    c = stability.long_horizon.case(quick=False)
     assert c.verdict, c.observed
     assert c.figures["steps"] == 1e6 and c.figures["project_max_residual"] <= 1e-12
 
 
 # -- 5. redundant constraints -------------------------------------------------------------------------
-def test_redundant_exact_duplicates_raise_project_errors(cases: dict[str, Case]) -> None:
-    f = cases["redundant constraints"].figures
-    assert f["duplicate_solvers"] >= 3
-    assert f["duplicate_project_errors"] == f["duplicate_solvers"]
-    # where a redundant step answers on the manifold, the acceleration is the minimal model's
-    assert f["manifold_answers"] + f["manifold_errors"] == 2 * f["manifold_states"]
-    assert f["manifold_max_error"] <= 1e-10
+_QPSOLVERS_UNDIAGNOSED = ("qpsolvers:clarabel", "qpsolvers:daqp", "qpsolvers:osqp", "qpsolvers:proxqp")
 
 
-def test_redundant_case_reports_its_problems(cases: dict[str, Case]) -> None:
+def test_redundant_case_figures(cases: dict[str, Case]) -> None:
     c = cases["redundant constraints"]
-    assert c.verdict == (c.figures["silent_wrong"] == 0 and c.figures["non_project_exceptions"] == 0)
-    if c.figures["silent_wrong"]:
-        assert any("Silently wrong acceleration" in p for p in c.problems)
+    f = c.figures
+    # every solver but the qpsolvers route names the duplicated constraints and their redundancy
+    assert f["duplicate_solvers"] >= 3
+    assert f["duplicate_clear_errors"] >= f["duplicate_solvers"] - len(_QPSOLVERS_UNDIAGNOSED)
+    assert f["duplicate_cosine_min"] <= 1e-15  # the margin of a rank-deficient J is 0
+    # on the manifold: always the clear RealizabilityError, never decided by round-off
+    assert f["manifold_clear_errors"] == f["manifold_steps"] == 2 * f["manifold_states"]
+    assert f["unclear_manifold_outcomes"] == 0
+    # off the manifold: an error or a warning, never a silent answer; margin ∝ δ²
+    assert f["off_manifold_silent_answers"] == 0 and f["wrong_answers"] == 0
+    assert f["off_manifold_errors"] > 0 and f["off_manifold_warned_answers"] > 0
+    assert f["margin_over_drift_squared"] == pytest.approx(4.7e-3, rel=0.1)
+    assert f["non_project_exceptions"] == 0
+    assert f["simulate_redundancy_named"] == f["simulate_runs"]
+    assert c.verdict == (f["duplicate_clear_errors"] == f["duplicate_solvers"])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="library problem: redundant ideal constraints slightly off the manifold give a different acceleration "
-    "than the minimal model with margin 1 and no warning",
+@pytest.mark.parametrize(
+    "backend", [None, *[b for b in gp.qp.names() if b.startswith("casadi:")], "qpsolvers:quadprog"]
 )
+def test_redundant_exact_duplicates_raise_a_clear_realizability_error(backend: str | None) -> None:
+    if backend is not None and backend not in gp.qp.names():
+        pytest.skip(f"{backend} is not installed")
+    _, doubled = redundant.circle_twice()
+    q, v = np.array([math.cos(0.3), math.sin(0.3)]), 1.5 * np.array([-math.sin(0.3), math.cos(0.3)])
+    with pytest.raises(gp.RealizabilityError, match=r"'circle', 'circle again'.*margin 0.*redundant") as info:
+        doubled.step(0.0, q, v, solver="direct" if backend is None else "qp", backend=backend)
+    assert info.value.t == 0.0 and info.value.margin < 1e-15
+
+
+@pytest.mark.parametrize(
+    "backend",
+    _QPSOLVERS_UNDIAGNOSED,  # (fixed: a singular step is no longer handed to the backend)
+)
+def test_redundant_exact_duplicates_through_qpsolvers_raise_a_clear_realizability_error(backend: str) -> None:
+    if backend not in gp.qp.names():
+        pytest.skip(f"{backend} is not installed")
+    _, doubled = redundant.circle_twice()
+    q, v = np.array([math.cos(0.3), math.sin(0.3)]), 1.5 * np.array([-math.sin(0.3), math.cos(0.3)])
+    with warnings.catch_warnings(), stability._case.quiet_c_output():
+        warnings.simplefilter("ignore")  # Clarabel warns about its own numerical error
+        try:
+            doubled.step(0.0, q, v, solver="qp", backend=backend)
+            raised: Exception | None = None
+        except gp.GaussppError as exc:
+            raised = exc
+    assert isinstance(raised, gp.RealizabilityError), repr(raised)
+    assert "'circle', 'circle again'" in str(raised) and "redundant" in str(raised)
+
+
 def test_redundant_verdict(cases: dict[str, Case]) -> None:
     assert cases["redundant constraints"].verdict, cases["redundant constraints"].observed
 
 
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason="library problem: see test_redundant_verdict")
 def test_redundant_constraints_never_give_a_silently_wrong_acceleration() -> None:
-    scene, redundant = stability._pendulum_with_distance()
-    q, v = stability._pendulum_state(0.7, 1.3, stretch=1e-8)  # a drift of 1e-8
-    ref = scene.model.step(0.0, q, v, solver="direct").a
-    for solver in ("direct", "qp"):
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            try:
-                res = redundant.step(0.0, q, v, solver=solver)
-            except gp.GaussppError:
-                continue  # a clear error is acceptable
-        warned = any(issubclass(w.category, gp.RealizabilityWarning) for w in caught)
-        assert warned or np.max(np.abs(res.a - ref)) <= 1e-8 * np.max(np.abs(ref)), solver
+    scene, model = redundant.pendulum_with_distance()
+    for stretch in (0.0, 1e-8, 1e-4, 1e-2):  # on the manifold, and drifts off it
+        q, v = redundant.pendulum_state(0.7, 1.3, stretch=stretch)
+        ref = scene.model.step(0.0, q, v, solver="direct").a
+        for solver in ("direct", "qp"):
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                try:
+                    res = model.step(0.0, q, v, solver=solver)
+                except gp.GaussppError:
+                    continue  # a clear error is acceptable
+            warned = _realizability_warned(caught)
+            assert warned or np.max(np.abs(res.a - ref)) <= 1e-8 * np.max(np.abs(ref)), (stretch, solver)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="library problem: projection onto redundant constraints yields NaN; rk4-compiled raises IndexError",
-)
+def test_redundant_constraints_on_the_manifold_raise_naming_the_redundancy() -> None:
+    _, model = redundant.pendulum_with_distance()
+    for phi in (0.0, 0.3, 0.7, 2.5):  # formerly decided by round-off: errors at some angles, answers at others
+        q, v = redundant.pendulum_state(phi, 1.3)
+        for solver in ("direct", "qp"):
+            with pytest.raises(gp.RealizabilityError, match=r"'pin-x', 'pin-z', 'distance'.*redundant"):
+                model.step(0.0, q, v, solver=solver)
+
+
 def test_redundant_constraints_with_projection_fail_with_project_errors() -> None:
-    scene, redundant = stability._pendulum_with_distance()
+    scene, model = redundant.pendulum_with_distance()
     for method in ("rk4-compiled", "DOP853"):
         try:
-            gp.simulate(redundant, scene.q0, scene.v0, 1.0, dt=0.01, method=method, stabilize="project")
+            gp.simulate(model, scene.q0, scene.v0, 1.0, dt=0.01, method=method, stabilize="project")
         except gp.GaussppError:
             continue
         except Exception as exc:  # noqa: BLE001 - what this test is about
             raise AssertionError(f"{method}: not a project error: {exc!r}") from None
+    q, v = redundant.pendulum_state(0.0, 0.0, stretch=1e-3)  # off the manifold: the projection cannot proceed
+    with pytest.raises(gp.InitialDataError, match=r"projecting .* failed .*redundant"):
+        gp.simulate(model, q, v, 1.0, dt=0.01, stabilize="project")
 
 
 # -- 6. initial data off the constraint -------------------------------------------------------------
 def test_off_constraint_errors_name_the_constraint(cases: dict[str, Case]) -> None:
     f = cases["initial data off the constraint"].figures
-    assert f["setups"] == 5
+    assert f["setups"] == 8
     assert f["named_errors"] == f["setups"]
-    assert f["projected_onto_constraint"] >= 4  # every setup but the far crane
+    assert f["projected_near"] == 5  # all but the far and the singular crane
+    # the vertical rope (NaN), g = 5 (no convergence) and g = 0.3 (Newton's distant root, refused)
+    assert f["projection_refused_clearly"] == 3 and f["projected_far"] == 0
+    assert f["projected_near"] + f["projection_refused_clearly"] + f["projected_far"] == f["setups"]
 
 
 def test_off_constraint_pendulum_error_and_projection() -> None:
@@ -254,14 +302,36 @@ def test_off_constraint_pendulum_error_and_projection() -> None:
     assert max(np.abs(traj.g[0]).max(), np.abs(traj.residual[0]).max()) <= 1e-12
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="library problem: stabilize='project' (3 Newton steps, no convergence check) does not reach the crane's "
-    "constraint from 1e-2 away and then advises passing stabilize='project'",
-)
+def test_off_constraint_projection_reaches_the_crane_constraint() -> None:
+    c = gp.scenes.get("crane", M0=1.0, m=0.5, L=1.0)
+    for offset in (1e-3, 1e-2):  # was: 3 Newton steps without a convergence check left g ≠ 0 at 1e-2
+        traj = gp.simulate(c.model, c.q0 + np.array([offset, 0.0]), c.v0, 0.05, dt=0.01, stabilize="project")
+        assert max(np.abs(traj.g[0]).max(), np.abs(traj.residual[0]).max()) <= 1e-12
+        assert np.max(np.abs(traj.q[0] - c.q0)) < 1.0
+
+
+def test_off_constraint_projection_fails_clearly_where_it_cannot_converge() -> None:
+    c = gp.scenes.get("crane", M0=1.0, m=0.5, L=1.0)
+    with pytest.raises(gp.InitialDataError, match=r"projecting .* failed at t=0 \(NaN\)") as info:
+        gp.simulate(c.model, [1e-3, 0.0], [0.0, 0.0], 0.05, dt=0.01, stabilize="project")  # the vertical rope
+    assert "stabilize='project'" not in str(info.value)  # it does not advise what the caller did
+    with pytest.raises(gp.InitialDataError, match=r"did not converge in 50 Newton steps"):
+        gp.simulate(c.model, c.q0 + np.array([5.0, 0.0]), c.v0, 0.05, dt=0.01, stabilize="project")
+
+
 def test_off_constraint_verdict(cases: dict[str, Case]) -> None:
     assert cases["initial data off the constraint"].verdict, cases["initial data off the constraint"].observed
+
+
+def test_off_constraint_projection_stays_near_the_data_or_fails() -> None:
+    c = gp.scenes.get("crane", M0=1.0, m=0.5, L=1.0)
+    q0 = c.q0 + np.array([0.3, 0.0])
+    try:
+        traj = gp.simulate(c.model, q0, c.v0, 0.05, dt=0.01, stabilize="project")
+    except gp.InitialDataError:
+        return  # failing clearly is right too
+    # the first Newton step is 3.4 long; a backtracking Newton lands at (−0.96, 1.31), 1.6 away
+    assert np.max(np.abs(traj.q[0] - q0)) <= 10 * 3.4, traj.q[0]
 
 
 # -- 7. crane near the vertical rope --------------------------------------------------------------
@@ -270,9 +340,25 @@ def test_crane_vertical_step_level_and_adaptive_methods(cases: dict[str, Case]) 
     assert f["step_margin_vs_closed_form"] <= 1e-6
     assert f["step_warnings_correct"] == 7 and f["vertical_errors"] == 2
     # the adaptive lanes warn and stop at t* without keeping a sample beyond it
-    for run in ("rk45", "dop853", "dop853_margin_error_1e_9", "radau"):
-        assert f[f"{run}_ok"] == 1.0, run
+    for run in ("rk45", "dop853_margin_error_1e_9", "radau"):
+        assert f[f"{run}_ok"] == 1.0 and f[f"{run}_warned"] == 1.0, run
         assert abs(f[f"{run}_error_time"] - f["t_star"]) <= 1e-4
+    # cvodes (was: a 100 s stall, then a bare GaussppError and nothing kept) stops within the recorded sample
+    # before t*, keeps that prefix, and names the small margin
+    assert f["cvodes_ok"] == 1.0 and f["cvodes_samples_beyond_t_star"] == 0
+    assert 0 <= f["t_star"] - f["cvodes_error_time"] <= 2e-3
+
+
+def test_crane_cvodes_fails_quickly_with_an_integration_error() -> None:
+    f = crane.free_fall()
+    traj = gp.simulate(
+        f.model, f.q0, f.v0, f.t_end, method="cvodes", solver="direct", record=[0.05, 0.09, 0.1, 0.2], throw=False
+    )
+    assert traj.status == "failed" and traj.message.startswith(
+        "IntegrationError: CVODES stopped between t=0.09 and t=0.1"
+    )
+    assert "margin" in traj.message
+    assert list(traj.t) == [0.0, 0.05, 0.09]  # the prefix is kept
 
 
 @pytest.mark.xfail(
@@ -293,13 +379,22 @@ def test_crane_fixed_step_rk4_warns_and_stops_at_the_vertical_rope() -> None:
         warnings.simplefilter("always")
         traj = gp.simulate(s.model, s.q0, s.v0, 0.2, dt=1e-3, method="rk4", solver="direct", throw=False)
     assert traj.status == "failed"
-    assert any(issubclass(w.category, gp.RealizabilityWarning) for w in caught), "no warning"
+    assert _realizability_warned(caught), "no warning"
     assert np.all(traj.t <= t_star), "samples beyond the vertical rope"
+
+
+def test_crane_failure_hint_reaches_the_raised_exception() -> None:
+    f = crane.free_fall()
+    with warnings.catch_warnings(), pytest.raises(gp.NonFiniteError) as info:
+        warnings.simplefilter("ignore")
+        gp.simulate(f.model, f.q0, f.v0, f.t_end, dt=1e-3, method="rk4", solver="direct")
+    assert "smallest realizability margin" in info.value.trajectory.message  # type: ignore[attr-defined]
+    assert "smallest realizability margin" in str(info.value)
 
 
 @pytest.mark.slow
 def test_full_study() -> None:
-    """The whole study at full size (1e6 steps, cvodes' 10⁷-step stall): every case runs and is judged."""
+    """The whole study at full size (1e6 steps, every lane through the vertical rope): every case runs, is judged."""
     result = stability.run(quick=False)
     print()
     print(stability.table(result))

@@ -114,6 +114,6 @@ class CasadiConic(QPBackend):
         if not solver.stats().get("success", True) or not np.all(np.isfinite(u)):
             raise QPSolveError(
                 f"{self.name} did not solve the step QP (status {solver.stats().get('return_status')!r}); "
-                "try backend='casadi:qrqp' or solver='direct'"
+                "try another backend or solver='direct'"
             )
         return u, np.array(sol["lam_a"]).ravel()

@@ -50,8 +50,6 @@ class QpsolversBackend(QPBackend):
                 f"{self.name} failed on the step QP: {exc}; check the realizability margin, or try another backend"
             ) from exc
         if not sol.found or sol.x is None or not np.all(np.isfinite(sol.x)):
-            raise QPSolveError(
-                f"{self.name} found no solution of the step QP; try backend='casadi:qrqp' or solver='direct'"
-            )
+            raise QPSolveError(f"{self.name} found no solution of the step QP; try another backend or solver='direct'")
         y = sol.y if sol.y is not None else np.full(S.shape[0], np.nan)
         return np.asarray(sol.x, float), np.asarray(y, float)
