@@ -273,11 +273,45 @@ def demo(args: argparse.Namespace) -> int:
     print("µs/step: one compiled casadi call per step (Function.buffer), minimum over repeats.")
     print()
     _demo_scenes()
+    _demo_figures(Path(args.out))
     return 0
 
 
 #: Steps of compiled RK4 per scene in the demo (stiff or fast scenes need more).
 _DEMO_STEPS = {"stiff-chain": 20_000, "andrews": 6_000}
+
+
+def _demo_figures(out: Path) -> None:
+    """The teaching pictures: rod vs servo, the realizability map, three realizations, the skate."""
+    try:
+        from . import plot
+
+        plot._pyplot()
+    except GaussppError as exc:  # matplotlib is an optional extra
+        print(f"\n(no figures: {exc})")
+        return
+    from .simulate import simulate
+
+    out.mkdir(parents=True, exist_ok=True)
+    runs = {}
+    for realization in ("ideal", "servo"):
+        scene = scenes.get("two-masses", realization=realization, k=3.0, v=0.5)
+        runs[f"{'rod' if realization == 'ideal' else 'servo'}"] = simulate(
+            scene.model, scene.q0, scene.v0, 4.0, method="rk4-compiled", dt=1e-3, solver="direct", record=10
+        )
+    figures = {
+        "two_masses.png": lambda: plot.trajectory(runs, title="two masses: rod (ideal) vs follower force (servo)"),
+        "realizability_map.png": plot.realizability_map,
+        "three_realizations.png": plot.three_realizations,
+        "skate.png": plot.skate,
+    }
+    written = []
+    for name, draw in figures.items():
+        fig = draw()
+        fig.savefig(out / name, dpi=100, bbox_inches="tight")
+        plot._pyplot().close(fig)
+        written.append(str(out / name))
+    print(f"\nfigures written: {', '.join(written)}")
 
 
 def _demo_scenes() -> None:
@@ -769,9 +803,9 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     parser.add_argument("--quiet", action="store_true", help="no progress indication on stderr")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    sub.add_parser("demo", parents=[common], help="the main job: scenes solved by QP and direct, a table").set_defaults(
-        func=demo
-    )
+    dem = sub.add_parser("demo", parents=[common], help="the main job: every scene by QP and direct, a table, figures")
+    dem.add_argument("--out", default="demo-figures", help="directory for the figures (default: demo-figures/)")
+    dem.set_defaults(func=demo)
     sc = sub.add_parser(
         "scenes",
         parents=[common],

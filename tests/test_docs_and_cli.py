@@ -38,10 +38,10 @@ def test_example_runs(script: str, tmp_path: Path) -> None:
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 1000
 
 
-def test_demo_table(capsys: pytest.CaptureFixture[str]) -> None:
+def test_demo_table(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
     import gausspp as gp
 
-    assert cli.main(["demo"]) == 0
+    assert cli.main(["demo", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
     first = out.split("Every scene")[0].splitlines()
     step_rows = [line for line in first if line.startswith(("two-masses", "rigid-body-servo"))]
