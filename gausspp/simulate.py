@@ -339,9 +339,12 @@ def _jacobian(rhs: RightHandSide) -> Any:
 
     n = rhs.model.nq + rhs.model.nv + rhs.model.n_lam + 2
     if rhs.solver == "direct":
-        F = rhs_function(rhs.model, "direct", None)
-        t, y, s = ca.SX.sym("t"), ca.SX.sym("y", n), ca.SX.sym("stab", 2)
-        jac = ca.Function("rhs_jacobian", [t, y, s], [ca.jacobian(F(t, y, s), y)])
+        cache = rhs.model.__dict__
+        if "_rhs_jacobian" not in cache:  # built once per model
+            F = rhs_function(rhs.model, "direct", None)
+            t, y, s = ca.SX.sym("t"), ca.SX.sym("y", n), ca.SX.sym("stab", 2)
+            cache["_rhs_jacobian"] = ca.Function("rhs_jacobian", [t, y, s], [ca.jacobian(F(t, y, s), y)])
+        jac = cache["_rhs_jacobian"]
         stab = rhs.stab
 
         def exact(t_: float, y_: np.ndarray) -> np.ndarray:
