@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from .errors import GaussppError, InputError, ShapeError
+from .scenes._rigid import inertia_matrix, unit_vector
 
 if TYPE_CHECKING:
     from .integral import Verification
@@ -258,24 +259,14 @@ class RealizabilityGrid:
 
 
 def _inertia(inertia: Any) -> np.ndarray:
-    arr = np.asarray(inertia, dtype=float)
-    if arr.shape == (3,):
-        arr = np.diag(arr)
-    if arr.shape != (3, 3):
-        raise ShapeError(f"inertia must be 3 principal moments or a 3×3 tensor, got shape {arr.shape}")
+    arr = inertia_matrix("plot", inertia)
     if not (np.all(np.isfinite(arr)) and np.allclose(arr, arr.T)) or np.linalg.eigvalsh(arr).min() <= 0:
         raise InputError(f"inertia must be symmetric positive definite, got {arr.tolist()}")
     return arr
 
 
 def _unit(name: str, value: Any) -> np.ndarray:
-    vec = np.asarray(value, dtype=float).ravel()
-    if vec.shape != (3,):
-        raise ShapeError(f"{name} must have 3 components, got {vec.size}")
-    norm = float(np.linalg.norm(vec))
-    if not np.isfinite(norm) or norm == 0.0:
-        raise InputError(f"{name} must be a finite nonzero vector, got {vec.tolist()}")
-    return vec / norm
+    return unit_vector("plot", name, value)
 
 
 def servo_margin(inertia: Any, l: Any, n: Any) -> np.ndarray:
