@@ -46,8 +46,9 @@ class RightHandSide:
             raise evaluation_failed(exc, where, margin_error=m.margin_error) from None
         out = self.kernel.result()
         ok = out["pivot"][0] > 0 and np.isfinite(out["checksum"][0]) and out["qp_primal"][0] <= QP_TOLERANCE
-        if ok and self._scalar_margin:
-            ok = abs(out["S_norm"].flat[0]) >= self.model.margin_error
+        if ok and self._scalar_margin:  # one constraint row: the margin is the length of that row of S
+            row = out["S_norm"].ravel()
+            ok = float(np.sqrt(row @ row)) >= self.model.margin_error
         if not ok:  # diagnose: raises the project error that explains the failure
             size = float(np.max(np.abs(y)))
             if not size < 1e100:
