@@ -9,7 +9,7 @@ A bare solver name (``"osqp"``) means the compiled route when casadi ships that 
 The default, ``casadi:qrqp``, measured fastest among the round-off-accurate backends on
 this hardware (``benchmarks/step.py``: ≈1.5 µs per QP step, agreement with the direct
 solution at 1e-15); OSQP, the core dependency, is always available as ``casadi:osqp`` and
-``qpsolvers:osqp`` but is an iterative method (≈10 µs and accurate only after polishing).
+``qpsolvers:osqp`` but is an iterative method (≈13 µs and accurate only after polishing).
 """
 
 from __future__ import annotations
