@@ -10,7 +10,7 @@ STAMP := $(VENV)/.installed
 $(STAMP): pyproject.toml
 	python3 -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e ".[test,plots,backends]"
+	$(PY) -m pip install --quiet -e ".[test,plots,backends,dask]"
 	touch $(STAMP)
 
 demo: $(STAMP)

@@ -45,7 +45,8 @@ def best_of(repeats: int, fn):  # type: ignore[no-untyped-def]
 
 def scene_table(horizon: float, repeats: int) -> None:
     print(
-        f"{'scene':20s} {'method':13s} {'solver':12s} {'wall s':>8s} {'steps':>7s} {'rhs':>7s} {'µs/step':>8s} {'error':>9s}"
+        f"{'scene':20s} {'method':13s} {'solver':12s} {'wall s':>8s} {'steps':>7s} {'rhs':>7s} "
+        f"{'µs/step':>8s} {'error':>9s}"
     )
     print("-" * 90)
     for name in gp.scenes.names():
@@ -95,7 +96,8 @@ def compiled_step_cost(steps: int = 20_000) -> None:
         per_step = best_of(5, lambda: run(y0, t, h, np.zeros(2)))[0] / steps * 1e6
         label = "direct" if solver == "direct" else gp.qp.DEFAULT
         print(
-            f"  {label:12s} {per_step:6.2f} µs per RK4 step   target ≤ {target:g} µs: {'met' if per_step <= target else 'NOT met'}"
+            f"  {label:12s} {per_step:6.2f} µs per RK4 step   "
+            f"target ≤ {target:g} µs: {'met' if per_step <= target else 'NOT met'}"
         )
 
 

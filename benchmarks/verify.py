@@ -3,7 +3,8 @@
 For a scene with a differential relation (20) (the gyrostat, n = 3, a sparse QP with interval
 rows) and one with pointwise relations (the pendulum, n = 3, two holonomic rows), time
 ``gp.verify`` (discretization, the QP on the nodes and on every other node for the verdict) at
-several node counts, minimum of 3 runs; and a 6-mass chain (n = 6, pointwise rows). Goal from issue 4: 1000 nodes, n ≤ 6, under 2 s.
+several node counts, minimum of 3 runs; and a 6-mass chain (n = 6, pointwise rows).
+Goal from issue 4: 1000 nodes, n ≤ 6, under 2 s.
 """
 
 from __future__ import annotations

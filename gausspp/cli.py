@@ -13,6 +13,7 @@ import ast
 import inspect
 import io
 import json
+import os
 import sys
 import textwrap
 import threading
@@ -676,6 +677,42 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"gausspp: error: {_one_line(message)} (see '{self.prog} --help')\n")
 
 
+def sweep(args: argparse.Namespace) -> int:
+    """A parameter sweep on local worker processes, appended to --out as it runs (resumable)."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    from . import sweep as sw
+
+    if not (np.isfinite(args.resolution) and 0 < args.resolution <= 30):
+        raise UsageError(f"--resolution is a grid step in degrees, 0 < R ≤ 30; got {args.resolution}")
+    step = args.resolution
+    lon = np.linspace(-180.0, 180.0, int(round(360 / step)) + 1)
+    lat = np.linspace(-90.0, 90.0, int(round(180 / step)) + 1)
+    params = sw.grid(lat=[float(x) for x in lat], lon=[float(x) for x in lon])
+    if args.workers == 1:
+        res = sw.sweep(sw.realizability_task, params, executor="serial", out=args.out, progress=not args.quiet)
+    else:
+        with ProcessPoolExecutor(args.workers) as pool:
+            res = sw.sweep(sw.realizability_task, params, executor=pool, out=args.out, progress=not args.quiet)
+    margin = res.column("margin")
+    k = int(np.nanargmin(margin)) if np.isfinite(margin).any() else 0
+    print(
+        f"realizability of a servo torque along n over the sphere, I = diag(1, 2, 3), l = (1, 1, 1)/√3, "
+        f"{step:g}° grid: {len(res)} directions"
+    )
+    print(
+        f"computed {res.computed} in {res.wall_time:.2f} s ({res.tasks_per_second:.0f} tasks/s, "
+        f"{args.workers} worker{'s' if args.workers > 1 else ''}); failed: {len(res.errors)}"
+    )
+    print(
+        f"smallest margin {margin[k]:.3e} at lon {params[k]['lon']:g}°, lat {params[k]['lat']:g}°; "
+        f"largest {np.nanmax(margin):.3f}"
+    )
+    if args.out:
+        print(f"written: {args.out} (JSON lines; run again to resume)")
+    return 0 if res.ok else 1
+
+
 def _common() -> _Parser:
     """Options every subcommand accepts too (after its name); absent there, the top-level value stands."""
     common = _Parser(add_help=False)
@@ -867,6 +904,25 @@ def _parser() -> argparse.ArgumentParser:
     rep.add_argument("--out", default="report", help="directory for CSV/JSON and plots (default: report/)")
     rep.add_argument("--verbose", action="store_true", help="progress on stderr")
     rep.set_defaults(func=report)
+
+    swp = sub.add_parser(
+        "sweep",
+        parents=[common],
+        help="a parameter sweep on all local cores, saved as it runs (resumable)",
+        description="Run a sweep on local worker processes; with --out every result is appended as it arrives and "
+        "a second run with the same --out resumes. For a dask cluster use gausspp.sweep from Python.",
+    )
+    swp.add_argument("study", choices=("realizability",), help="realizability: the servo margin over the sphere of n")
+    swp.add_argument("--resolution", type=float, default=2.0, metavar="R", help="grid step in degrees (default: 2)")
+    swp.add_argument(
+        "--workers",
+        type=_positive(int),
+        default=os.cpu_count() or 1,
+        metavar="N",
+        help="worker processes (default: all)",
+    )
+    swp.add_argument("--out", metavar="FILE", help="JSON-lines file of results (appended; resumes)")
+    swp.set_defaults(func=sweep)
     return parser
 
 
