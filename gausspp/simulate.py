@@ -135,6 +135,8 @@ def simulate(
     evaluations = rhs.evaluations if compiled_evaluations is None else compiled_evaluations
     traj, record_failure = _record(model, rhs, ts, ys, meth, label, steps, failure)
     traj = replace(traj, rhs_evaluations=evaluations)
+    if isinstance(record_failure, RealizabilityError):  # the cause, seen before the integration broke down
+        failure = record_failure
     failure = failure or record_failure
     if failure is None:
         return traj
@@ -404,6 +406,19 @@ def _record(
             margin = margin[: i + 1]
             ts, ys, kept = ts[: i + 1], ys[: i + 1], i + 1
             cols = {k: v[: i + 1] for k, v in cols.items()}
+    touch = _margin_touches_zero(ts, margin, model.margin_error) if record_failure is None else None
+    if touch is not None:  # a minimum of the margin between samples reaches zero: the step went past it
+        i, t_min = touch
+        record_failure = RealizabilityError(
+            f"the realizability margin reaches zero between t={ts[i - 1]:.6g} and t={ts[i + 1]:.6g} (near "
+            f"t={t_min:.6g}; constraints {', '.join(repr(n) for n in model.names)}): the realization cannot keep the "
+            "constraint there and the step went past it; samples after it are dropped",
+            t=float(t_min),
+            constraint=", ".join(model.names),
+            margin=0.0,
+        )
+        margin, ts, ys, kept = margin[: i + 1], ts[: i + 1], ys[: i + 1], i + 1
+        cols = {k: v[: i + 1] for k, v in cols.items()}
     bad = np.flatnonzero(margin < model.margin_error)
     if bad.size and record_failure is None:
         i = int(bad[0])
@@ -462,11 +477,33 @@ def _record(
     return traj, record_failure
 
 
+#: A sampled margin below this is "small": worth a look between samples, and worth naming in a failure.
+SMALL_MARGIN = 1e-2
+
+
+def _margin_touches_zero(ts: np.ndarray, margin: np.ndarray, floor: float) -> tuple[int, float] | None:
+    """First strict local minimum of the sampled margin whose parabola through it and its neighbours dips
+    below ``floor``: a margin that touches zero between samples without changing the sign of det S (the
+    crane's ``sin²θ``). Returns the sample index and the estimated time, or ``None``."""
+    for i in range(1, margin.size - 1):
+        m0, m1, m2 = margin[i - 1 : i + 2]
+        if not (m1 < SMALL_MARGIN and m1 < m0 and m1 < m2):  # only an already small minimum is suspect
+            continue
+        t0, t1, t2 = ts[i - 1 : i + 2]
+        a, b, c = np.polyfit([t0 - t1, 0.0, t2 - t1], [m0, m1, m2], 2)
+        if a <= 0:
+            continue
+        vertex = -b / (2 * a)
+        if c - b * b / (4 * a) < floor and t0 - t1 <= vertex <= t2 - t1:
+            return i, float(t1 + vertex)
+    return None
+
+
 def _failed(traj: Trajectory, failure: Exception) -> Trajectory:
     message = f"{type(failure).__name__}: {failure}"
     if isinstance(failure, (NonFiniteError, IntegrationError)) and traj.margin.size:
         i = int(np.argmin(traj.margin))
-        if traj.margin[i] < 1e-2:  # a failing integration near a singular step: say so
+        if traj.margin[i] < SMALL_MARGIN:  # a failing integration near a singular step: say so
             message += (
                 f" [smallest realizability margin on the way: {traj.margin[i]:.3g} at t={traj.t[i]:.6g} — the "
                 "realization may have lost the constraint there]"
