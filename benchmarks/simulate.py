@@ -49,7 +49,7 @@ def scene_table(horizon: float, repeats: int) -> None:
         f"{'µs/step':>8s} {'error':>9s}"
     )
     print("-" * 90)
-    for name in gp.scenes.names():
+    for name in gp.scenes.names("equality"):
         scene = gp.scenes.get(name)
         t_end = min(scene.t_end, horizon)
         for method, opts in RUNS:

@@ -9,7 +9,7 @@ compulsion as a QP and is cross-checked against the direct multiplier solution.
 from __future__ import annotations
 
 from . import methods, plot, qp, realizability, report, scenes
-from .constraints import Constraint, Holonomic
+from .constraints import Constraint, Holonomic, Unilateral
 from .drift import Baumgarte
 from .errors import (
     GaussppError,
@@ -67,6 +67,7 @@ __all__ = [
     "StepResult",
     "Trajectory",
     "UnknownNameError",
+    "Unilateral",
     "Vakonomic",
     "Verification",
     "methods",

@@ -70,3 +70,80 @@ class RightHandSide:
     def qdot(self, t: float, y: np.ndarray) -> np.ndarray:
         """The kinematics ``q̇ = K(q, v, t)`` at ``y`` (one step evaluation)."""
         return np.array(self.evaluate(t, y)["qdot"])
+
+
+#: Along a simulation, redundant rows disagree by the drift (the integration error): up to this relative
+#: inconsistency they are solved in the least-squares sense (a single step allows only 1e-8).
+DRIFT_CONSISTENCY_TOL = 1e-5
+
+
+class GeneralRightHandSide:
+    """``F(t, y)`` through the general Gauss QP (:meth:`Model.general_step`): bounded actuators and
+    redundant constraint rows. One numeric QP per evaluation, from Python (tens to hundreds of µs)."""
+
+    kernel = None
+
+    def __init__(self, model: Model, backend: str | None, stab: Stabilization) -> None:
+        from .gauss_qp import check_backend
+
+        self.model = model
+        self.backend = check_backend(backend)
+        self.solver = f"gauss-qp:{self.backend}"
+        self.stab = np.array(stab.stab, float)
+        self.evaluations = 0
+        m = model
+        self._slices = (slice(0, m.nq), slice(m.nq, m.nq + m.nv), slice(m.nq + m.nv, m.nq + m.nv + m.n_lam))
+        self._lam_cols = np.array(model.lam_columns, dtype=int)
+        #: Whether the realizability margin says anything (not for redundant rows, where it is 0 by design).
+        self.margin_checked = not getattr(model, "_redundant", False)
+
+    def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
+        """Evaluate the step at ``(t, y)``; raise a project error if it fails."""
+        sq, sv, sl = self._slices
+        self.evaluations += 1
+        size = float(np.max(np.abs(y)))
+        if not size < 1e100:
+            raise NonFiniteError(
+                f"the state diverged at t={t:.6g} (largest component {size:.3g}): the integration is unstable; "
+                "reduce dt or use a stiff method"
+            )
+        m = self.model
+        res, sol, extras = m._general(
+            float(t),
+            y[sq],
+            y[sv],
+            y[sl],
+            self.backend,
+            self.stab if stabilized else np.zeros(2),
+            consistency_tol=DRIFT_CONSISTENCY_TOL,
+        )
+        data = m._general_data(float(t), y[sq], y[sv], y[sl], np.zeros(2))
+        A, J, D = data[0], data[3].reshape(m.k, m.nv), data[5].reshape(m.nv, m.m)
+        Jt = np.linalg.solve(np.linalg.cholesky(A), J.T).T
+        W = np.linalg.solve(np.linalg.cholesky(A), D)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            S_norm = (Jt @ W) / np.outer(np.linalg.norm(Jt, axis=1), np.linalg.norm(W, axis=0))
+        return {
+            "a": res.a,
+            "u": res.u,
+            "reaction": res.reaction,
+            "compulsion": np.array([res.compulsion]),
+            "Phi": res.constraint_value,
+            "S_norm": np.nan_to_num(S_norm),
+            "tracking_error": np.array([res.tracking_error]),
+            "saturated": np.asarray(res.saturated, bool),
+            **extras,
+        }
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        out = self.evaluate(t, y)
+        u = out["u"]
+        return np.concatenate([out["qdot"], out["a"], u[self._lam_cols], out["power_reaction"], out["power_forces"]])
+
+    def qdot(self, t: float, y: np.ndarray) -> np.ndarray:
+        """The kinematics ``q̇ = K(q, v, t)`` at ``y``."""
+        return np.array(self.evaluate(t, y)["qdot"])
+
+
+#: Either right-hand side (the compiled step, or the general QP's).
+AnyRightHandSide = RightHandSide | GeneralRightHandSide

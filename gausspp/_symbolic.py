@@ -44,6 +44,8 @@ def as_expression(value: Any, shape: tuple[int | None, int | None], what: str) -
         expr = expr.T
     elif cols == 1 and expr.size1() == 1 and expr.size2() != 1:
         expr = expr.T
+    elif rows is None and cols not in (None, 1) and expr.size2() == 1 and expr.size1() == cols:
+        expr = expr.T  # a flat vector where rows of length ``cols`` are asked: one row
     if (rows is not None and expr.size1() != rows) or (cols is not None and expr.size2() != cols):
         want = f"({'any' if rows is None else rows}, {'any' if cols is None else cols})"
         raise ShapeError(f"{what} returned shape {expr.shape}, expected {want}")

@@ -329,7 +329,7 @@ def _demo_scenes() -> None:
     )
     print(header)
     print("-" * len(header))
-    for name in scenes.names():
+    for name in scenes.names("equality"):
         scene = scenes.get(name)
         T = min(scene.t_end, 2.0)
         steps = _DEMO_STEPS.get(name, 2000)

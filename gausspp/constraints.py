@@ -16,6 +16,7 @@ from typing import Any
 import casadi as ca
 
 from ._symbolic import evaluate
+from .errors import InputError
 from .frontends import Mechanism
 from .realizations import Realization, as_realization
 
@@ -98,6 +99,44 @@ class Holonomic(Constraint):
         g = evaluate(self._g, (mech.q, mech.t), (None, 1), f"constraint {self.name!r}: g(q, t)")
         Phi = ca.jacobian(g, mech.q) @ mech.qdot + ca.jacobian(g, mech.t)
         return _differentiate(Phi, mech, g=g)
+
+
+class Unilateral(Holonomic):
+    """A one-sided contact ``g(q, t) ≥ 0`` (non-penetration), kept ideally (paper §1, eq. (4)).
+
+    While the contact is open (``g > 0``) it exerts nothing. When it is closed (``g = 0``)
+    Gauss's principle with inequalities decides: the acceleration minimizes the compulsion
+    subject to ``g̈ ≥ 0`` for every closed contact, so a contact pushes (``λ ≥ 0`` along
+    ``∂g/∂q``) only while it would otherwise be penetrated, and lets go when the force would
+    have to pull — complementarity from the QP's KKT conditions.
+
+    When a contact closes with approaching speed the velocities jump (an impact): the
+    post-impact velocities minimize the kinetic-energy distance ``½(v⁺ − v⁻)ᵀA(v⁺ − v⁻)``
+    (Gauss's principle at the velocity level) subject to Newton's law ``ġ⁺ ≥ −e ġ⁻`` on the
+    closed contacts, ``e`` the coefficient of restitution. For one degree of freedom the
+    kinetic energy after the impact is ``e²`` times that before.
+
+    Parameters
+    ----------
+    g : callable ``(q, t) -> (k,)``
+        The gap function(s), positive when open.
+    name : str, optional
+    restitution : float in [0, 1]
+        Newton's coefficient ``e`` (0 plastic, 1 elastic).
+    """
+
+    def __init__(self, g: Callable[..., Any], name: str | None = None, restitution: float = 0.0) -> None:
+        super().__init__(g, name=name, realization=None)
+        try:
+            e = float(restitution)
+        except (TypeError, ValueError):
+            raise InputError(f"Unilateral {name!r}: restitution must be a number, got {restitution!r}") from None
+        if not 0.0 <= e <= 1.0:
+            raise InputError(f"Unilateral {name!r}: restitution must lie in [0, 1], got {restitution!r}")
+        self.restitution = e
+
+    def __repr__(self) -> str:
+        return f"Unilateral(name={self.name!r}, restitution={self.restitution})"
 
 
 def _differentiate(Phi: ca.SX, mech: Mechanism, g: ca.SX | None) -> ConstraintExpressions:

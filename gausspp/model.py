@@ -16,12 +16,21 @@ import numpy as np
 
 from . import qp
 from ._outcome import Group, Where, evaluation_failed, to_result
-from .constraints import Constraint
-from .errors import InputError, MissingMultiplierError, NonFiniteError, ShapeError, UnknownNameError
+from .constraints import Constraint, Unilateral
+from .errors import (
+    InputError,
+    MissingMultiplierError,
+    NonFiniteError,
+    RealizabilityError,
+    ShapeError,
+    UnknownNameError,
+)
 from .frontends import Mechanism
+from .gauss_qp import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, solve_general
 from .kernel import Kernel, build_kernel
 from .problem import StepProblem
-from .results import StepResult
+from .realizability import cosines
+from .results import ImpactResult, StepResult
 from .step import StepExpressions
 
 SOLVERS = ("qp", "direct")
@@ -66,26 +75,43 @@ class Model:
         margin_warn: float = 1e-6,
         margin_error: float = 1e-12,
         refine: bool = True,
+        contact_tol: float = 1e-9,
+        _allow_free: bool = False,
     ) -> None:
         if not isinstance(mechanism, Mechanism):
             raise InputError(f"mechanism must be a Lagrangian, RigidBody or MassMatrix, got {type(mechanism).__name__}")
         if isinstance(constraints, Constraint):
             constraints = [constraints]
         constraints = list(constraints)
-        if not constraints:
+        if not constraints and not _allow_free:
             raise InputError("a Model needs at least one constraint")
         for c in constraints:
             if not isinstance(c, Constraint):
-                raise InputError(f"constraints must be Constraint or Holonomic objects, got {type(c).__name__}")
+                raise InputError(
+                    f"constraints must be Constraint, Holonomic or Unilateral objects, got {type(c).__name__}"
+                )
         if not 0 <= margin_error < margin_warn:
             raise InputError(f"need 0 ≤ margin_error < margin_warn, got {margin_error} and {margin_warn}")
+        if not (contact_tol >= 0 and np.isfinite(contact_tol)):
+            raise InputError(f"contact_tol must be a finite number ≥ 0, got {contact_tol}")
         self.mechanism = mechanism
-        self.constraints = tuple(constraints)
-        self.names = [c.name if c.name is not None else f"constraint {i}" for i, c in enumerate(constraints)]
-        if len(set(self.names)) != len(self.names):
-            raise InputError(f"constraint names must be unique, got {self.names}")
+        all_names = [c.name if c.name is not None else f"constraint {i}" for i, c in enumerate(constraints)]
+        if len(set(all_names)) != len(all_names):
+            raise InputError(f"constraint names must be unique, got {all_names}")
+        bilateral = [(c, n) for c, n in zip(constraints, all_names, strict=True) if not isinstance(c, Unilateral)]
+        unilateral = [(c, n) for c, n in zip(constraints, all_names, strict=True) if isinstance(c, Unilateral)]
+        self.constraints = tuple(c for c, _ in bilateral)
+        self.names = [n for _, n in bilateral]
+        #: The unilateral contacts ``g(q, t) ≥ 0`` (kept apart from the bilateral constraints).
+        self.contacts: tuple[Unilateral, ...] = tuple(c for c, _ in unilateral)
+        self.contact_names = [n for _, n in unilateral]
         self.margin_warn, self.margin_error, self.refine = margin_warn, margin_error, refine
+        self.contact_tol = float(contact_tol)
         self._assemble()
+        self._assemble_contacts()
+        #: True if some realization has bounds on its reaction (bounded servo, :class:`~gausspp.Force`).
+        self.bounded = any(c.realization.bounds is not None for c in self.constraints)
+        self._general_fn: ca.Function | None = None
         self._kernels: dict[tuple[str, str | None], Kernel] = {}
         self._data_fn: ca.Function | None = None
         self._projection: ca.Function | None = None
@@ -122,8 +148,10 @@ class Model:
         self._groups = groups
         known = [p for p in lam0_parts if p is not None]
         self._lam0: np.ndarray | None = None if len(known) < len(lam0_parts) else np.concatenate([np.zeros(0), *known])
-        Phi = ca.vertcat(*[e.Phi for e in exprs])
-        g = ca.vertcat(*[e.g if e.g is not None else ca.SX.zeros(k) for e, k in zip(exprs, sizes, strict=True)])
+        Phi = ca.vertcat(ca.SX(0, 1), *[e.Phi for e in exprs])
+        g = ca.vertcat(
+            ca.SX(0, 1), *[e.g if e.g is not None else ca.SX.zeros(k) for e, k in zip(exprs, sizes, strict=True)]
+        )
         self.holonomic_rows = [
             i
             for e, k, at in zip(exprs, sizes, np.cumsum([0, *sizes]), strict=False)
@@ -136,9 +164,9 @@ class Model:
             A=mech.A,
             f=mech.f,
             r0=r0,
-            J=ca.vertcat(*[e.J for e in exprs]),
-            phi=ca.vertcat(*[e.phi for e in exprs]) - self.stab[0] * Phi - self.stab[1] * g,
-            D=ca.horzcat(*Ds),
+            J=ca.vertcat(ca.SX(0, mech.nv), *[e.J for e in exprs]),
+            phi=ca.vertcat(ca.SX(0, 1), *[e.phi for e in exprs]) - self.stab[0] * Phi - self.stab[1] * g,
+            D=ca.horzcat(ca.SX(mech.nv, 0), *Ds),
             Phi=Phi,
             v=mech.v,
             qdot=mech.qdot,
@@ -149,6 +177,25 @@ class Model:
         self.has_energy = mech.energy is not None
         self.has_force_power = mech.F_nc is not None
         self._inputs = [mech.t, mech.q, mech.v, self.lam, self.stab]
+
+    def _assemble_contacts(self) -> None:
+        mech = self.mechanism
+        exprs = [c.expressions(mech) for c in self.contacts]
+        self.contact_rows = [int(e.Phi.numel()) for e in exprs]
+        self.contact_row_names = [
+            name if k == 1 else f"{name}[{i}]"
+            for name, k in zip(self.contact_names, self.contact_rows, strict=True)
+            for i in range(k)
+        ]
+        self._contact_expressions = (
+            ca.vertcat(ca.SX(0, 1), *[e.g for e in exprs if e.g is not None]),
+            ca.vertcat(ca.SX(0, mech.nv), *[e.J for e in exprs]),
+            ca.vertcat(ca.SX(0, 1), *[e.phi for e in exprs]),
+            ca.vertcat(ca.SX(0, 1), *[e.Phi for e in exprs]),
+        )
+        self.restitution = (
+            np.repeat([c.restitution for c in self.contacts], self.contact_rows) if self.contacts else np.zeros(0)
+        )
 
     @staticmethod
     def _lam0_of(lam0: np.ndarray | None, k: int, name: str) -> np.ndarray | None:
@@ -180,6 +227,11 @@ class Model:
         """
         if solver not in SOLVERS:
             raise UnknownNameError(f"solver={solver!r} is unknown; use one of {list(SOLVERS)}")
+        if self.contacts or self.bounded:
+            raise InputError(
+                "this model has unilateral contacts or bounded actuators: its step is the general Gauss QP, "
+                "solved from Python (model.step(..., solver='qp')), not a compiled kernel"
+            )
         if solver == "direct" and backend is not None:
             raise InputError(f"backend={backend!r} applies to solver='qp' only")
         chosen = qp.get(backend) if solver == "qp" else None
@@ -249,6 +301,13 @@ class Model:
         NotPositiveDefiniteError, NonFiniteError, ShapeError, QPSolveError
         """
         t, q, v, lam = self._state(t, q, v, lam)
+        if self.contacts or self.bounded:
+            if solver != "qp":
+                raise InputError(
+                    f"solver={solver!r}: a model with unilateral contacts or bounded actuators has no closed-form "
+                    "step (inequalities); use solver='qp'"
+                )
+            return self.general_step(t, q, v, lam, backend=_backend_name(backend))[0]
         kernel = self.kernel(solver, backend)
         name = "direct" if solver == "direct" else qp.get(backend).name
         where = Where(t, name, self._groups, lambda: self.step_data(t, q, v, lam))
@@ -256,7 +315,172 @@ class Model:
             out = kernel(t, q, v, lam, _NO_STAB)
         except RuntimeError as exc:  # casadi refused to evaluate (e.g. a QP plugin given NaN data)
             raise evaluation_failed(exc, where, margin_error=self.margin_error) from None
-        return to_result(out, where, margin_warn=self.margin_warn, margin_error=self.margin_error)
+        try:
+            return to_result(out, where, margin_warn=self.margin_warn, margin_error=self.margin_error)
+        except RealizabilityError as exc:
+            if solver == "direct":
+                exc.args = (
+                    f"{exc} (solver='direct' needs independent rows; solver='qp' returns the unique acceleration "
+                    "and the least-norm multiplier when the rows are redundant)",
+                )
+                raise
+            return self._redundant_step(t, q, v, lam, exc, backend)
+
+    def _redundant_step(
+        self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, exc: Exception, backend: Any
+    ) -> StepResult:
+        """The compiled QP refused a singular step: if the rows are merely redundant, the general QP answers."""
+        try:
+            result, solution = self.general_step(t, q, v, lam, backend=_backend_name(backend))
+        except RealizabilityError as general:  # the compiled step's message names the constraints and the cause
+            exc.args = (f"{exc} [the general QP: {general}]",)
+            raise exc from None
+        if solution.redundant_rows == 0:
+            raise exc
+        return result
+
+    # -- the general Gauss QP (inequalities, bounds, redundancy) -----------------------------
+    def _general_data(self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, stab: Any) -> list[np.ndarray]:
+        if self._general_fn is None:
+            p, mech = self._expressions, self.mechanism
+            gc, Jc, phic, gdotc = self._contact_expressions
+            power = ca.dot(mech.v, mech.F_nc) if mech.F_nc is not None else ca.SX(0)
+            energy = mech.energy if mech.energy is not None else ca.SX(0)
+            self._general_fn = ca.Function(
+                "general_data",
+                self._inputs,
+                [
+                    p.A,
+                    p.f,
+                    p.r0,
+                    p.J,
+                    p.phi,
+                    p.D,
+                    p.Phi,
+                    p.g if p.g is not None else ca.SX.zeros(self.k),
+                    mech.qdot,
+                    energy,
+                    power,
+                    gc,
+                    Jc,
+                    phic,
+                    gdotc,
+                ],
+            )
+        return [np.array(x) for x in self._general_fn(t, q, v, lam, stab)]
+
+    def closed_contacts(self, t: float, q: Any, v: Any, lam: Any = None) -> np.ndarray:
+        """Indices of the contact rows that are closed at the state (``|g| ≤ contact_tol``)."""
+        t, q, v, lam = self._state(t, q, v, lam)
+        gc = self._general_data(t, q, v, lam, _NO_STAB)[11].ravel()
+        return np.flatnonzero(gc <= self.contact_tol)
+
+    def general_step(
+        self,
+        t: float,
+        q: Any,
+        v: Any,
+        lam: Any = None,
+        *,
+        backend: str | None = None,
+        stab: Any = _NO_STAB,
+        closed: Any = None,
+    ) -> tuple[StepResult, GaussSolution]:
+        """The step by the general Gauss QP (:mod:`gausspp.gauss_qp`): contacts, bounds, redundancy.
+
+        A contact is *closed* when its gap is within ``contact_tol`` of zero (or when it is listed
+        in ``closed``, indices of contact rows, as an event-driven simulation knows); closed contacts enter
+        as ``g̈ ≥ 0`` with a force ``λ ≥ 0``. A closed contact that is still approaching
+        (``ġ < −contact_tol``) needs an impact first (:meth:`impact`): that is an error here.
+        ``backend`` is a qpsolvers solver (default: daqp if installed, else OSQP).
+
+        Returns the :class:`StepResult` and the QP's own :class:`~gausspp.gauss_qp.GaussSolution`.
+        """
+        t, q, v, lam = self._state(t, q, v, lam)
+        result, sol, _ = self._general(t, q, v, lam, backend, stab, closed)
+        return result, sol
+
+    def _general(
+        self,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        lam: np.ndarray,
+        backend: str | None,
+        stab: Any,
+        closed: Any = None,
+        consistency_tol: float = CONSISTENCY_TOL,
+    ) -> tuple[StepResult, GaussSolution, dict[str, np.ndarray]]:
+        """:meth:`general_step` on checked inputs; also returns kinematics, energy, powers and ``g``."""
+        A, f, r0, J, phi, D, Phi, g, qdot, energy, power, gc, Jc, phic, gdotc = self._general_data(t, q, v, lam, stab)
+        f, r0, phi, Phi, gc, phic, gdotc = (x.ravel() for x in (f, r0, phi, Phi, gc, phic, gdotc))
+        closed = np.flatnonzero(gc <= self.contact_tol) if closed is None else np.asarray(closed, dtype=int)
+        approaching = closed[gdotc[closed] < -self.contact_tol]
+        if approaching.size:
+            i = int(approaching[0])
+            raise InputError(
+                f"contact {self.contact_row_names[i]!r} is closed and approaching (ġ = {gdotc[i]:.3g}) at t={t:.6g}: "
+                "the velocities must jump first — apply model.impact(...) or simulate, which does"
+            )
+        if not np.all(np.isfinite(A)) or not np.all(np.isfinite(f + r0)):
+            raise NonFiniteError(f"the mass matrix or the forces are not finite at t={t:.6g}; check the model there")
+        try:
+            a0 = np.linalg.solve(A, f + r0)
+        except np.linalg.LinAlgError:
+            a0 = np.zeros(self.nv)  # the QP's Cholesky reports the singular A
+        m, nc = self.m, closed.size
+        lower, upper = np.full(m + nc, -np.inf), np.full(m + nc, np.inf)
+        lower[m:] = 0.0
+        kind = ["eq"] * self.k + ["ge"] * nc
+        for c, grp in zip(self.constraints, self._groups, strict=True):
+            if c.realization.bounds is not None:
+                lower[grp.cols], upper[grp.cols] = c.realization.bounds
+                for i in range(grp.rows.start, grp.rows.stop):
+                    kind[i] = "track"
+        problem = GaussProblem(
+            A=A,
+            a0=a0,
+            D=np.hstack([D.reshape(self.nv, m), Jc[closed].T.reshape(self.nv, nc)]),
+            J=np.vstack([J.reshape(self.k, self.nv), Jc[closed].reshape(nc, self.nv)]),
+            phi=np.concatenate([phi, phic[closed]]),
+            kind=kind,
+            lower=lower,
+            upper=upper,
+            rows=[*self.row_names, *(self.contact_row_names[i] for i in closed)],
+            t=t,
+        )
+        sol = solve_general(problem, backend, consistency_tol)
+        u, mu = sol.u[:m], sol.u[m:]
+        contact_force = np.zeros(len(self.contact_row_names))
+        contact_force[closed] = mu
+        D2, J2 = D.reshape(self.nv, m), J.reshape(self.k, self.nv)
+        cos = cosines(A, J2, D2) if self.k else np.zeros(0)
+        margin = (float(cos.min()) if m >= self.k and cos.size else 0.0) if self.k else 1.0
+        reaction = r0 + D2 @ u + Jc[closed].T.reshape(self.nv, nc) @ mu
+        result = StepResult(
+            t=t,
+            a=sol.a,
+            u=u,
+            reaction=reaction,
+            compulsion=sol.compulsion,
+            margin=margin,
+            cosines=cos,
+            residual=sol.residual[: self.k],
+            constraint_value=Phi,
+            free_acceleration=np.linalg.solve(A, f),
+            solver=f"gauss-qp:{check_backend(backend)}",
+            contact_force=contact_force,
+            tracking_error=sol.tracking_error,
+            saturated=sol.at_bound[:m],
+        )
+        extras = {
+            "qdot": qdot.ravel(),
+            "energy": energy.ravel(),
+            "power_forces": power.ravel(),
+            "power_reaction": np.array([float(v @ reaction)]),
+            "g": g.ravel(),
+        }
+        return result, sol, extras
 
     def step_data(self, t: float, q: Any, v: Any, lam: Any = None) -> StepProblem:
         """The step's ``A, f = F − h, r₀, J, φ, D, Φ`` as numbers (no checks on their values)."""
@@ -267,9 +491,73 @@ class Model:
         A, f, r0, J, phi, D, Phi = (np.array(x) for x in self._data_fn(t, q, v, lam, _NO_STAB))
         return StepProblem(A=A, f=f.ravel(), r0=r0.ravel(), J=J, phi=phi.ravel(), D=D, Phi=Phi.ravel())
 
+    def impact(
+        self,
+        t: float,
+        q: Any,
+        v: Any,
+        lam: Any = None,
+        *,
+        backend: str | None = None,
+        plastic: Any = (),
+        closed: Any = None,
+    ) -> ImpactResult:
+        """The velocity jump when contacts close: Gauss's principle at the velocity level.
+
+        The post-impact velocities minimize ``½(v⁺ − v⁻)ᵀA(v⁺ − v⁻)`` subject to the bilateral
+        constraints (``Φ(q, v⁺, t) = 0``, impulses along their realizations' directions) and
+        Newton's law on every closed contact (``|g| ≤ contact_tol``):
+        ``ġ⁺ ≥ −e ġ⁻`` if it approaches (``ġ⁻ < 0``), ``ġ⁺ ≥ 0`` otherwise, with impulse
+        ``Λ ≥ 0`` and ``Λ (ġ⁺ + e ġ⁻) = 0``. Contact rows listed in ``plastic`` use ``e = 0``.
+        """
+        t, q, v, lam = self._state(t, q, v, lam)
+        if self.bounded:
+            raise InputError(
+                "impacts with bounded actuators are not supported: a bounded force cannot deliver an impulse"
+            )
+        A, _f, _r0, J, _phi, D, Phi, *_, gc, Jc, _phic, gdotc = self._general_data(t, q, v, lam, _NO_STAB)
+        Phi, gc, gdotc = Phi.ravel(), gc.ravel(), gdotc.ravel()
+        closed = np.flatnonzero(gc <= self.contact_tol) if closed is None else np.asarray(closed, dtype=int)
+        e = self.restitution[closed].copy()
+        e[np.isin(closed, np.asarray(plastic, dtype=int))] = 0.0
+        m, nc, nv = self.m, closed.size, self.nv
+        Jcc = Jc[closed].reshape(nc, nv)
+        target = -e * np.minimum(gdotc[closed], 0.0)  # ġ⁺ ≥ target
+        lower = np.concatenate([np.full(m, -np.inf), np.zeros(nc)])
+        problem = GaussProblem(
+            A=A,
+            a0=v,
+            D=np.hstack([D.reshape(nv, m), Jcc.T]),
+            J=np.vstack([J.reshape(self.k, nv), Jcc]),
+            phi=np.concatenate([J.reshape(self.k, nv) @ v - Phi, Jcc @ v - gdotc[closed] + target]),
+            kind=["eq"] * self.k + ["ge"] * nc,
+            lower=lower,
+            upper=np.full(m + nc, np.inf),
+            rows=[*self.row_names, *(self.contact_row_names[i] for i in closed)],
+            t=t,
+        )
+        sol = solve_general(problem, backend)
+        impulse = np.zeros(len(self.contact_row_names))
+        impulse[closed] = sol.u[m:]
+        lam_after = lam + sol.u[: self.m][self.lam_columns] if self.n_lam else lam
+        return ImpactResult(
+            t=t,
+            v_before=v,
+            v_after=sol.a,
+            lam_after=lam_after,
+            impulse=impulse,
+            closed=closed,
+            kinetic_energy_before=0.5 * float(v @ A @ v),
+            kinetic_energy_after=0.5 * float(sol.a @ A @ sol.a),
+        )
+
     def __repr__(self) -> str:
         cons = ", ".join(f"{n} ({c.realization.label})" for n, c in zip(self.names, self.constraints, strict=True))
-        return f"Model({type(self.mechanism).__name__}, nq={self.nq}, nv={self.nv}, constraints: {cons})"
+        contacts = ", ".join(
+            f"{n} (e={c.restitution:g})" for n, c in zip(self.contact_names, self.contacts, strict=True)
+        )
+        more = f"; contacts: {contacts}" if contacts else ""
+        return f"Model({type(self.mechanism).__name__}, nq={self.nq}, nv={self.nv}, constraints: {cons}{more})"
 
 
 def _state_vector(name: str, value: Any, size: int, t: float) -> np.ndarray:
@@ -282,3 +570,7 @@ def _state_vector(name: str, value: Any, size: int, t: float) -> np.ndarray:
     if not np.isfinite(arr.sum()):
         raise NonFiniteError(f"{name} contains NaN or inf at t={t:.6g}: {arr.tolist()}")
     return arr
+
+
+def _backend_name(backend: str | qp.QPBackend | None) -> str | None:
+    return backend.name if isinstance(backend, qp.QPBackend) else backend

@@ -83,6 +83,8 @@ class Realization(ABC):
     has_state: bool = False
     label: str = "realization"
     lam0: np.ndarray | None = None
+    #: Bounds ``(lo, hi)`` on the reaction unknowns ``u`` (``None``: unbounded; see :class:`Force`).
+    bounds: tuple[np.ndarray, np.ndarray] | None = None
     #: What to change when the realization cannot keep the constraint (used in messages).
     hint: str = "choose reaction directions D with J A⁻¹ D nonsingular"
 
@@ -136,27 +138,82 @@ def _initial(lam0: Any) -> np.ndarray | None:
 class Force(Realization):
     """Béghin servo-constraint (eqs. (10), (13)): a controlled force ``R = Mᵀλ``.
 
-    The constraint is kept by an actuator pushing along the rows of ``M``; the virtual
-    displacements are ``M δx = 0``. Realizable iff ``(J A⁻¹ Mᵀ)`` is nonsingular (12).
+    The constraint is kept by actuators pushing along the rows of ``M``; the virtual
+    displacements are ``M δx = 0``. With one actuator per constraint row (``M`` is ``k × nv``)
+    it is realizable iff ``J A⁻¹ Mᵀ`` is nonsingular (12), and the force is unique.
+
+    **Over-actuation.** ``M`` may have more rows (actuators) than the constraint has (``m > k``):
+    then many forces keep the constraint and Gauss's principle picks the one of least compulsion,
+    ``min uᵀ(M A⁻¹ Mᵀ)u`` subject to ``J A⁻¹ Mᵀ u = φ − J a₀`` — solved by the QP
+    (``solver="qp"``; the direct formula needs a square ``S``).
+
+    **Bounds.** ``bounds=(lo, hi)`` limits each actuator's ``λ`` (scalars or length-``m``
+    arrays, ``±inf`` for a free side). While the needed force is within the bounds, the motion
+    is that of the unbounded servo. When it is not, the actuators *saturate* and the constraint
+    can only be tracked: the step first minimizes the tracking error
+    ``Σᵢ (Jᵢ a − φᵢ)² / (Jᵢ A⁻¹ Jᵢᵀ)`` (the compulsion an ideal constraint would need to correct
+    the acceleration), then the compulsion among the minimizers (see :mod:`gausspp.gauss_qp`).
+    Physically: the actuator pushes as hard as it may in the direction that keeps the constraint
+    best, and the error is reported (``StepResult.tracking_error``). A saturated servo leaves
+    the constraint; add Baumgarte feedback (``stabilize="baumgarte"``) so that it returns to it
+    after the saturation ends.
 
     Parameters
     ----------
-    M : callable ``(q, v, t) -> (k, nv)``
-        Force directions, one row per constraint component.
+    M : callable ``(q, v, t) -> (m, nv)``
+        Force directions, one row per actuator (``m ≥ k``).
+    bounds : (lo, hi), optional
+        Bounds on each actuator's multiplier ``λ``.
     """
 
     label = "force"
     hint = "choose force directions M with J A⁻¹ Mᵀ nonsingular, i.e. M not A-orthogonal to ∂Φ/∂v (condition (12))"
 
-    def __init__(self, M: Callable[..., Any]) -> None:
+    def __init__(self, M: Callable[..., Any], bounds: Any = None) -> None:
         self.M = M
+        self._bounds = bounds
+        if bounds is not None:
+            if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
+                raise InputError(f"Force: bounds must be a pair (lo, hi), got {bounds!r}")
+            lo, hi = (np.atleast_1d(np.asarray(b, dtype=float)) for b in bounds)
+            if np.any(np.isnan(lo)) or np.any(np.isnan(hi)):
+                raise NonFiniteError(f"Force: bounds contain NaN: {bounds!r}")
+            if lo.ndim != 1 or hi.ndim != 1:
+                raise ShapeError(f"Force: bounds must be scalars or vectors, got shapes {lo.shape}, {hi.shape}")
+            self.label = "force (bounded)"
+
+    def _M(self, mech: Mechanism, c: ConstraintExpressions) -> ca.SX:
+        M = evaluate(self.M, (mech.q, mech.v, mech.t), (None, mech.nv), "Force: M(q, v, t)")
+        k = c.J.shape[0]
+        if M.size1() < k:
+            raise ShapeError(
+                f"Force: M has {M.size1()} rows (actuators) for a constraint with {k} rows: fewer actuators than "
+                "constraint rows can never keep it; give at least one actuator per row"
+            )
+        return M
 
     def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
-        M = _matrix(self.M, mech, c.J.shape[0], "Force: M(q, v, t)")
+        M = self._M(mech, c)
+        if self._bounds is not None:
+            self.bounds = _bounds(self._bounds, M.size1())
         return Reaction(D=M.T, r0=ca.SX.zeros(mech.nv))
 
     def virtual_displacements(self, mech: Mechanism, c: ConstraintExpressions, a: ca.SX) -> VirtualDisplacements:
-        return VirtualDisplacements(E1=None, E0=_matrix(self.M, mech, c.J.shape[0], "Force: M(q, v, t)"))
+        return VirtualDisplacements(E1=None, E0=self._M(mech, c))
+
+    def __repr__(self) -> str:
+        return "Force()" if self._bounds is None else f"Force(bounds={self._bounds!r})"
+
+
+def _bounds(bounds: Any, m: int) -> tuple[np.ndarray, np.ndarray]:
+    lo, hi = (
+        np.broadcast_to(np.asarray(b, dtype=float), (m,)).copy() if np.size(b) in (1, m) else None for b in bounds
+    )
+    if lo is None or hi is None:
+        raise ShapeError(f"Force: bounds need 1 or {m} entries (one per actuator), got {bounds!r}")
+    if np.any(lo > hi):
+        raise InputError(f"Force: a lower bound exceeds its upper bound: lo={lo.tolist()}, hi={hi.tolist()}")
+    return lo, hi
 
 
 class Inertial(Realization):

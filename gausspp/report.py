@@ -139,7 +139,7 @@ def work_precision(
     progress: Callable[[str], None] | None = None,
 ) -> list[Row]:
     """Run the study; see the module docstring. ``solvers`` are ``"direct"`` and QP backend names."""
-    names = list(scene_names or scenes.names())
+    names = list(scene_names or scenes.names("equality"))
     meths = [_methods.get(m) for m in (method_names or ["rk4", "rk4-compiled", "DOP853", "Radau", "cvodes"])]
     solver_list = list(solvers or ["direct", qp.DEFAULT, "casadi:osqp"])
     rows: list[Row] = []
@@ -277,7 +277,7 @@ def qp_floor(scene_names: Sequence[str] | None = None, samples: int = 5) -> dict
     """Each backend's step against the direct solution at states along each scene's motion, and
     OSQP's own floor (without the refinement step) against ``eps_abs = eps_rel`` with and
     without polishing (on the pendulum)."""
-    names = list(scene_names or scenes.names())
+    names = list(scene_names or scenes.names("equality"))
     worst: dict[str, float] = {}
     for name in names:
         scene = scenes.get(name)

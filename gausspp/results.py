@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -43,6 +43,13 @@ class StepResult:
     qp_residuals : (float, float) or None
         The QP's own relative primal ``‖S u − rhs‖∞`` and dual ``‖H u + Sᵀ y‖∞`` residuals
         (each divided by the size of its terms).
+    contact_force : (n_contact_rows,) array
+        Multipliers ``λ ≥ 0`` of the model's unilateral contacts (0 for open ones; empty without contacts).
+    tracking_error : float
+        How far bounded servos fall short of their constraints (0 unless an actuator saturates;
+        see :class:`~gausspp.Force`).
+    saturated : (m,) bool array
+        Reaction unknowns at one of their bounds (all ``False`` without bounds).
     """
 
     t: float
@@ -57,6 +64,9 @@ class StepResult:
     free_acceleration: np.ndarray
     solver: str
     qp_residuals: tuple[float, float] | None = None
+    contact_force: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    tracking_error: float = 0.0
+    saturated: np.ndarray | None = None
 
     def disagreement(self, other: StepResult) -> float:
         """Largest relative difference in ``a`` and in ``u`` from another result of the same step.
@@ -73,3 +83,30 @@ def _relative(diff: np.ndarray, *scales: np.ndarray) -> float:
     scale = max(float(np.max(np.abs(s), initial=0.0)) for s in scales)
     size = float(np.max(np.abs(diff), initial=0.0))
     return size / scale if scale > 0 else size
+
+
+@dataclass(frozen=True)
+class ImpactResult:
+    """A velocity jump at contacts (:meth:`gausspp.Model.impact`).
+
+    Attributes
+    ----------
+    t : float
+    v_before, v_after : (nv,) arrays
+    lam_after : (n_lam,) array
+        ``λ`` after the impact (realizations with ``λ`` as state take the impulse ``Δλ``).
+    impulse : (n_contact_rows,) array
+        Contact impulses ``Λ ≥ 0`` (0 for open contacts).
+    closed : array of int
+        The contact rows that took part.
+    kinetic_energy_before, kinetic_energy_after : float
+    """
+
+    t: float
+    v_before: np.ndarray
+    v_after: np.ndarray
+    lam_after: np.ndarray
+    impulse: np.ndarray
+    closed: np.ndarray
+    kinetic_energy_before: float
+    kinetic_energy_after: float

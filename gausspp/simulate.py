@@ -20,7 +20,7 @@ import numpy as np
 from . import methods as _methods
 from . import qp
 from ._outcome import QP_TOLERANCE, Where, to_result
-from ._rhs import RightHandSide
+from ._rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .drift import Baumgarte, Stabilization, as_stabilization, projection_function
 from .errors import (
     GaussppError,
@@ -44,7 +44,7 @@ def simulate(
     t0: float = 0.0,
     lam0: Any = None,
     dt: float | None = None,
-    method: str | _methods.Method = "rk4",
+    method: str | _methods.Method | None = None,
     solver: str = "qp",
     backend: str | None = None,
     stabilize: str | Baumgarte | list[Any] | None = None,
@@ -68,7 +68,8 @@ def simulate(
     dt : float
         Step for fixed-step methods (and, if given, the first and largest step of adaptive ones).
     method : str
-        See :func:`gausspp.methods.names`: ``"rk4"``, ``"symplectic-euler"``, ``"RK45"``,
+        Default ``"rk4"`` (``"DOP853"`` for a model with unilateral contacts, whose events only
+        adaptive methods locate). See :func:`gausspp.methods.names`: ``"rk4"``, ``"symplectic-euler"``, ``"RK45"``,
         ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"rk4-compiled"``, ``"cvodes"``.
     solver : {"qp", "direct"}
         How each step is solved; ``backend`` picks the QP backend.
@@ -87,6 +88,8 @@ def simulate(
     -------
     Trajectory
     """
+    if method is None:  # fixed-step RK4, or DOP853 where contact events must be located
+        method = "DOP853" if model.contacts else "rk4"
     meth = _methods.get(method)
     t0, t_end = float(t0), float(t_end)
     if not (np.isfinite(t0) and np.isfinite(t_end) and t_end > t0):
@@ -107,15 +110,51 @@ def simulate(
             f"the compiled lane needs the step inside the casadi graph: use solver='direct' or a casadi QP "
             f"backend (casadi:qrqp, casadi:daqp, casadi:osqp, ...), not {backend!r}"
         )
+    if model.contacts:
+        from .contact import simulate_contacts
+
+        return simulate_contacts(
+            model,
+            q0,
+            v0,
+            t_end,
+            t0=t0,
+            lam0=lam0,
+            dt=dt,
+            method=meth,
+            solver=solver,
+            backend=backend,
+            stabilize=stabilize,
+            rtol=rtol,
+            atol=atol,
+            constraint_tol=constraint_tol,
+            throw=throw,
+            record=record,
+        )
     stab = as_stabilization(stabilize, dt)
     q, v, lam = _initial_state(model, t0, q0, v0, lam0)
     if stab.project:
         q, v = _project_initial(model, t0, q, v, lam, constraint_tol)
     _check_on_constraint(model, t0, q, v, lam, constraint_tol)
 
-    rhs = RightHandSide(model, solver, backend, stab)
+    general = model.bounded or _redundant_at(model, solver, backend, t0, q, v, lam)
+    rhs: AnyRightHandSide
+    if general:
+        if solver == "direct":
+            raise InputError(
+                "solver='direct' cannot step a model with bounded actuators (inequalities); use solver='qp'"
+            )
+        if meth.lane == "compiled":
+            raise InputError(
+                f"method {meth.name!r} runs the compiled step, which a model with bounded actuators or redundant "
+                "constraint rows does not have: use a Python or scipy method (rk4, RK45, DOP853, Radau, ...)"
+            )
+        rhs = GeneralRightHandSide(model, backend, stab)
+        rhs.margin_checked = not _rows_redundant(model, t0, q, v, lam)
+    else:
+        rhs = RightHandSide(model, solver, backend, stab)
     y0 = np.concatenate([q, v, lam, [0.0, 0.0]])
-    label = "direct" if solver == "direct" else qp.get(backend).name
+    label = rhs.solver if general else ("direct" if solver == "direct" else qp.get(backend).name)
     failure: Exception | None = None
     compiled_evaluations = None
     try:
@@ -151,6 +190,30 @@ def simulate(
 
 
 # -- set-up ----------------------------------------------------------------------------------
+def _rows_redundant(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> bool:
+    """Whether the bilateral constraint rows are dependent at the state (the general QP's rank test)."""
+    if model.k == 0:
+        return False
+    try:
+        return model.general_step(t, q, v, lam)[1].redundant_rows > 0
+    except GaussppError:
+        return False
+
+
+def _redundant_at(
+    model: Model, solver: str, backend: str | None, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray
+) -> bool:
+    """Redundant rows on the QP route: the run uses the general QP, which returns the least-norm multiplier."""
+    if solver != "qp" or model.bounded:
+        return False
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RealizabilityWarning)
+            return model.step(t, q, v, lam, solver=solver, backend=backend).solver.startswith("gauss-qp:")
+    except GaussppError:
+        return False  # the run itself reports the error, with its trajectory
+
+
 def _initial_state(model: Model, t0: float, q0: Any, v0: Any, lam0: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     t, q, v, lam = model._state(t0, q0, v0, lam0)
     return q, v, lam
@@ -169,8 +232,8 @@ def _project(model: Model) -> Callable[[float, np.ndarray, np.ndarray, np.ndarra
 
 
 def _residuals(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    data = model.kernel("direct")(t, q, v, lam, np.zeros(2))
-    return data["g"].copy(), data["Phi"].copy()
+    data = model._general_data(t, q, v, lam, np.zeros(2))
+    return data[7].ravel().copy(), data[6].ravel().copy()
 
 
 def _project_initial(
@@ -223,7 +286,7 @@ def _check_on_constraint(model: Model, t: float, q: np.ndarray, v: np.ndarray, l
 # -- lanes -----------------------------------------------------------------------------------
 def _fixed_step(
     meth: _methods.Method,
-    rhs: RightHandSide,
+    rhs: AnyRightHandSide,
     model: Model,
     stab: Stabilization,
     t0: float,
@@ -286,7 +349,7 @@ def _keep_indices(n_steps: int, t0: float, dt: float, record: Any) -> np.ndarray
 
 def _scipy(
     meth: _methods.Method,
-    rhs: RightHandSide,
+    rhs: AnyRightHandSide,
     t0: float,
     t_end: float,
     y0: np.ndarray,
@@ -335,7 +398,7 @@ def _scipy(
     return np.array(ts), np.array(ys).reshape(len(ts), y0.size), steps, failure
 
 
-def _jacobian(rhs: RightHandSide) -> Any:
+def _jacobian(rhs: AnyRightHandSide) -> Any:
     """``∂F/∂y`` by casadi on the direct path; for a QP step, the structure only (the works feed nothing back)."""
     from ._compiled import rhs_function
 
@@ -359,7 +422,7 @@ def _jacobian(rhs: RightHandSide) -> Any:
 # -- recording -------------------------------------------------------------------------------
 def _record(
     model: Model,
-    rhs: RightHandSide,
+    rhs: AnyRightHandSide,
     ts: np.ndarray,
     ys: np.ndarray,
     meth: _methods.Method,
@@ -372,9 +435,9 @@ def _record(
     ys = ys.copy()
     for row in ys:  # adaptive lanes integrate q freely: bring samples back onto the manifold (unit quaternions)
         row[:nq] = model.mechanism.normalize_array(row[:nq])
-    cols: dict[str, list[np.ndarray]] = {
-        k: [] for k in ("a", "u", "reaction", "compulsion", "Phi", "g", "S_norm", "energy")
-    }
+    general = isinstance(rhs, GeneralRightHandSide)
+    keys = ("a", "u", "reaction", "compulsion", "Phi", "g", "S_norm", "energy")
+    cols: dict[str, list[np.ndarray]] = {k: [] for k in (*keys, *(("tracking_error", "saturated") if general else ()))}
     kernel = rhs.kernel
     record_failure: Exception | None = None
     kept = N
@@ -389,9 +452,12 @@ def _record(
             cols[k].append(np.array(out[k], copy=True))
     del kernel
     ts, ys = ts[:kept], ys[:kept]
-    S = np.array(cols["S_norm"]).reshape(kept, model.k, -1) if kept else np.zeros((0, model.k, model.m))
+    S = np.array(cols["S_norm"]).reshape(kept, model.k, model.m) if kept else np.zeros((0, model.k, model.m))
     margin = np.linalg.svd(S, compute_uv=False).min(axis=1) if kept and model.m >= model.k else np.zeros(kept)
-    if kept > 1 and model.m == model.k:  # det S is continuous along a motion: a sign change means S was singular
+    checked = getattr(rhs, "margin_checked", True)
+    if (
+        kept > 1 and model.m == model.k and checked
+    ):  # det S is continuous along a motion: a sign change means S was singular
         flips = np.flatnonzero(np.sign(np.linalg.det(S[1:])) * np.sign(np.linalg.det(S[:-1])) < 0)
         if flips.size and record_failure is None:
             i = int(flips[0])
@@ -406,7 +472,7 @@ def _record(
             margin = margin[: i + 1]
             ts, ys, kept = ts[: i + 1], ys[: i + 1], i + 1
             cols = {k: v[: i + 1] for k, v in cols.items()}
-    touch = _margin_touches_zero(ts, margin, model.margin_error) if record_failure is None else None
+    touch = _margin_touches_zero(ts, margin, model.margin_error) if record_failure is None and checked else None
     if touch is not None:  # a minimum of the margin between samples reaches zero: the step went past it
         i, t_min = touch
         record_failure = RealizabilityError(
@@ -419,8 +485,8 @@ def _record(
         )
         margin, ts, ys, kept = margin[: i + 1], ts[: i + 1], ys[: i + 1], i + 1
         cols = {k: v[: i + 1] for k, v in cols.items()}
-    bad = np.flatnonzero(margin < model.margin_error)
-    if bad.size and record_failure is None:
+    bad = np.flatnonzero(margin < model.margin_error) if checked else np.zeros(0, int)
+    if bad.size and record_failure is None and not general:
         i = int(bad[0])
         where = Where(
             float(ts[i]),
@@ -439,7 +505,18 @@ def _record(
             record_failure = exc
         ts, ys, margin, kept = ts[:i], ys[:i], margin[:i], i
         cols = {k: v[:i] for k, v in cols.items()}
-    low = np.flatnonzero(margin < model.margin_warn)
+    if bad.size and record_failure is None:  # the general QP answered although the margin vanished
+        i = int(bad[0])
+        record_failure = RealizabilityError(
+            f"the realizability margin vanished at t={ts[i]:.6g} (constraints {', '.join(map(repr, model.names))}): "
+            "the realization cannot keep the constraint there; samples from it on are dropped",
+            t=float(ts[i]),
+            constraint=", ".join(model.names),
+            margin=float(margin[i]),
+        )
+        ts, ys, margin, kept = ts[:i], ys[:i], margin[:i], i
+        cols = {k: v[:i] for k, v in cols.items()}
+    low = np.flatnonzero(margin < model.margin_warn) if checked else np.zeros(0, int)
     if low.size:
         warnings.warn(
             f"realizability margin {margin[low[0]]:.3g} at t={ts[low[0]]:.6g} (smallest {margin.min():.3g}) is small: "
@@ -473,6 +550,9 @@ def _record(
         solver=label,
         steps=steps,
         rhs_evaluations=rhs.evaluations,
+        contact_force=np.zeros((kept, 0)),
+        tracking_error=stack("tracking_error", 1).ravel() if general else np.zeros(kept),
+        saturated=stack("saturated", model.m).astype(bool) if general else np.zeros((kept, model.m), bool),
     )
     return traj, record_failure
 

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -42,6 +43,15 @@ class Trajectory:
         Why a run failed (empty on success).
     method, solver : str
     steps, rhs_evaluations : int
+    contact_force : (N, n_contact_rows) array
+        Multipliers of unilateral contacts (≥ 0; empty second axis without contacts).
+    tracking_error : (N,) array
+        How far bounded servos fall short (0 unless an actuator saturates; zeros without bounds).
+    saturated : (N, m) bool array
+        Reaction unknowns at a bound.
+    events : tuple of dict
+        Impacts and contact changes, in order (``{"t", "kind", "contact", ...}``); two samples
+        share the time of an impact: before and after the velocity jump.
     """
 
     t: np.ndarray
@@ -64,6 +74,10 @@ class Trajectory:
     solver: str
     steps: int
     rhs_evaluations: int
+    contact_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    tracking_error: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    saturated: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=bool))
+    events: tuple[dict[str, Any], ...] = ()
 
     @property
     def success(self) -> bool:

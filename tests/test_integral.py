@@ -27,7 +27,7 @@ def motion(scene: gp.scenes.Scene, horizon: float, samples: int) -> gp.Trajector
     )
 
 
-@pytest.mark.parametrize("name", gp.scenes.names())
+@pytest.mark.parametrize("name", gp.scenes.names("equality"))
 def test_every_scene_motion_passes_and_the_gap_falls(name: str) -> None:
     scene = gp.scenes.get(name)
     horizon = min(scene.t_end, 1.0)

@@ -39,7 +39,7 @@ def test_every_scene_reaches_1e_10_with_some_method() -> None:
     rows = report.work_precision(None, ["DOP853"], ["direct"], repeats=1)
     best = report.best_per_scene(rows, 1e-10)
     print({k: (v.setting, f"{v.final_error:.1e}") if v else None for k, v in best.items()})
-    assert set(best) == set(gp.scenes.names()) and all(v is not None for v in best.values())
+    assert set(best) == set(gp.scenes.names("equality")) and all(v is not None for v in best.values())
 
 
 def test_failed_runs_stay_in_the_table() -> None:

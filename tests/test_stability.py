@@ -184,59 +184,98 @@ def test_long_horizon_full_million_steps() -> None:
 
 
 # -- 5. redundant constraints -------------------------------------------------------------------------
-_QPSOLVERS_UNDIAGNOSED = ("qpsolvers:clarabel", "qpsolvers:daqp", "qpsolvers:osqp", "qpsolvers:proxqp")
+# Issue 7: solver='direct' stops with a clear RealizabilityError; solver='qp' hands exactly dependent,
+# consistent rows to the general Gauss QP: the unique acceleration and the least-norm multiplier.
+_QUADPROG = "qpsolvers:quadprog"
+_REDUNDANT_EXACT = 1e-10  # acceleration and multiplier, exactly dependent consistent rows (relative)
+
+
+def _qp_backend_params() -> list[object]:
+    return [None, *gp.qp.names()]
 
 
 def test_redundant_case_figures(cases: dict[str, Case]) -> None:
     c = cases["redundant constraints"]
     f = c.figures
-    # every solver but the qpsolvers route names the duplicated constraints and their redundancy
-    assert f["duplicate_solvers"] >= 3
-    assert f["duplicate_clear_errors"] >= f["duplicate_solvers"] - len(_QPSOLVERS_UNDIAGNOSED)
+    # A. circle twice: direct names both constraints, redundancy and solver='qp'; every other QP backend answers
+    assert f["duplicate_solvers"] >= 3 and f["duplicate_qp_backends"] == f["duplicate_solvers"] - 1
+    assert f["duplicate_direct_clear_error"] == 1
+    assert f["duplicate_qp_right_answers"] == f["duplicate_qp_backends"]
+    assert f["duplicate_max_acceleration_error"] <= _REDUNDANT_EXACT
+    assert f["duplicate_max_multiplier_error"] <= _REDUNDANT_EXACT
+    assert f["duplicate_least_norm_vs_pinv"] <= 1e-14  # λ_min·(1, 2)/5 is numpy's least-norm solution
     assert f["duplicate_cosine_min"] <= 1e-15  # the margin of a rank-deficient J is 0
-    # on the manifold: always the clear RealizabilityError, never decided by round-off
-    assert f["manifold_clear_errors"] == f["manifold_steps"] == 2 * f["manifold_states"]
+    # B. on the manifold: direct always the clear error, the default QP always the minimal model's answer
+    assert f["manifold_direct_clear_errors"] == f["manifold_states"]
+    assert f["manifold_default_qp_answers"] == f["manifold_states"]
+    assert f["manifold_qp_backend_steps"] >= 4 * f["duplicate_qp_backends"]
+    assert f["manifold_qp_answers"] == f["manifold_qp_steps"] - f["unclear_manifold_outcomes"]
     assert f["unclear_manifold_outcomes"] == 0
-    # off the manifold: an error or a warning, never a silent answer; margin ∝ δ²
-    assert f["off_manifold_silent_answers"] == 0 and f["wrong_answers"] == 0
-    assert f["off_manifold_errors"] > 0 and f["off_manifold_warned_answers"] > 0
+    assert f["manifold_max_error"] <= _REDUNDANT_EXACT and f["manifold_max_multiplier_error"] <= _REDUNDANT_EXACT
+    # C. off the manifold: an error, a warning, or the minimal model's answer (within δ) — never a silent wrong one
+    assert f["wrong_answers"] == 0
+    assert f["off_manifold_redundant_errors"] > 0 and f["off_manifold_warned_answers"] > 0
+    assert f["off_manifold_silent_answers"] > 0 and f["edge_silent_answers"] > 0
+    assert f["off_manifold_silent_error_over_drift"] <= 2.0 and f["off_manifold_silent_max_error"] <= 1e-7
+    # φ = 0: dependent rows with inconsistent right-hand sides — the clear redundancy error, which now also
+    # quotes the general QP's "contradict each other" (counted with the redundancy errors)
+    assert (
+        f["off_manifold_redundant_errors"]
+        + f["off_manifold_contradiction_errors"]
+        + f["off_manifold_other_errors"]
+        + f["off_manifold_warned_answers"]
+        + f["off_manifold_silent_answers"]
+        == f["off_manifold_steps"]
+    )
     assert f["margin_over_drift_squared"] == pytest.approx(4.7e-3, rel=0.1)
+    # D. simulate with solver='direct' fails with project errors naming the redundancy
     assert f["non_project_exceptions"] == 0
     assert f["simulate_redundancy_named"] == f["simulate_runs"]
-    assert c.verdict == (f["duplicate_clear_errors"] == f["duplicate_solvers"])
+    assert c.verdict == (f["duplicate_qp_right_answers"] == f["duplicate_qp_backends"])
 
 
-@pytest.mark.parametrize(
-    "backend", [None, *[b for b in gp.qp.names() if b.startswith("casadi:")], "qpsolvers:quadprog"]
-)
-def test_redundant_exact_duplicates_raise_a_clear_realizability_error(backend: str | None) -> None:
-    if backend is not None and backend not in gp.qp.names():
-        pytest.skip(f"{backend} is not installed")
+def test_redundant_exact_duplicates_direct_raises_a_clear_realizability_error() -> None:
     _, doubled = redundant.circle_twice()
-    q, v = np.array([math.cos(0.3), math.sin(0.3)]), 1.5 * np.array([-math.sin(0.3), math.cos(0.3)])
-    with pytest.raises(gp.RealizabilityError, match=r"'circle', 'circle again'.*margin 0.*redundant") as info:
-        doubled.step(0.0, q, v, solver="direct" if backend is None else "qp", backend=backend)
+    q, v = redundant.circle_state()
+    with pytest.raises(
+        gp.RealizabilityError,
+        match=r"'circle', 'circle again'.*margin 0.*redundant.*solver='qp' returns the unique acceleration and "
+        r"the least-norm multiplier",
+    ) as info:
+        doubled.step(0.0, q, v, solver="direct")
     assert info.value.t == 0.0 and info.value.margin < 1e-15
 
 
-@pytest.mark.parametrize(
-    "backend",
-    _QPSOLVERS_UNDIAGNOSED,  # (fixed: a singular step is no longer handed to the backend)
-)
-def test_redundant_exact_duplicates_through_qpsolvers_raise_a_clear_realizability_error(backend: str) -> None:
-    if backend not in gp.qp.names():
-        pytest.skip(f"{backend} is not installed")
-    _, doubled = redundant.circle_twice()
-    q, v = np.array([math.cos(0.3), math.sin(0.3)]), 1.5 * np.array([-math.sin(0.3), math.cos(0.3)])
+def test_redundant_circle_twice_least_norm_multiplier_is_lambda_min_times_1_2_over_5() -> None:
+    # D = [d, 2d] with d the minimal model's column: D u = d (u₁ + 2u₂) = d λ_min, least norm at u ∥ (1, 2)
+    minimal, doubled = redundant.circle_twice()
+    q, v = redundant.circle_state()
+    d_min, d_two = minimal.step_data(0.0, q, v).D, doubled.step_data(0.0, q, v).D
+    np.testing.assert_allclose(d_two, np.hstack([d_min, 2.0 * d_min]), rtol=1e-15, atol=0.0)
+    ref = minimal.step(0.0, q, v, solver="direct")
+    derived = ref.u[0] * np.array([1.0, 2.0]) / 5.0
+    pinv = redundant.least_norm_multiplier(doubled, q, v, ref.a)
+    np.testing.assert_allclose(pinv, derived, rtol=1e-14, atol=0.0)
+    lstsq = np.linalg.lstsq(d_two, d_min[:, 0] * ref.u[0], rcond=None)[0]
+    np.testing.assert_allclose(lstsq, derived, rtol=1e-14, atol=0.0)
+
+
+@pytest.mark.parametrize("backend", _qp_backend_params())
+def test_redundant_exact_duplicates_qp_answers_the_minimal_acceleration_and_least_norm_multiplier(
+    backend: str | None,
+) -> None:
+    minimal, doubled = redundant.circle_twice()
+    q, v = redundant.circle_state()
+    ref = minimal.step(0.0, q, v, solver="direct")
     with warnings.catch_warnings(), stability._case.quiet_c_output():
         warnings.simplefilter("ignore")  # Clarabel warns about its own numerical error
-        try:
-            doubled.step(0.0, q, v, solver="qp", backend=backend)
-            raised: Exception | None = None
-        except gp.GaussppError as exc:
-            raised = exc
-    assert isinstance(raised, gp.RealizabilityError), repr(raised)
-    assert "'circle', 'circle again'" in str(raised) and "redundant" in str(raised)
+        res = doubled.step(0.0, q, v, solver="qp", backend=backend)
+    assert res.solver.startswith("gauss-qp:"), res.solver
+    assert np.max(np.abs(res.a - ref.a)) <= _REDUNDANT_EXACT * np.max(np.abs(ref.a))
+    least_norm = ref.u[0] * np.array([1.0, 2.0]) / 5.0
+    assert np.max(np.abs(res.u - least_norm)) <= _REDUNDANT_EXACT * np.max(np.abs(least_norm)), res.u
+    np.testing.assert_allclose(res.reaction, ref.reaction, rtol=_REDUNDANT_EXACT, atol=1e-12)
+    assert res.margin <= 1e-15  # the step is singular and says so
 
 
 def test_redundant_verdict(cases: dict[str, Case]) -> None:
@@ -245,27 +284,58 @@ def test_redundant_verdict(cases: dict[str, Case]) -> None:
 
 def test_redundant_constraints_never_give_a_silently_wrong_acceleration() -> None:
     scene, model = redundant.pendulum_with_distance()
-    for stretch in (0.0, 1e-8, 1e-4, 1e-2):  # on the manifold, and drifts off it
-        q, v = redundant.pendulum_state(0.7, 1.3, stretch=stretch)
-        ref = scene.model.step(0.0, q, v, solver="direct").a
-        for solver in ("direct", "qp"):
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                try:
-                    res = model.step(0.0, q, v, solver=solver)
-                except gp.GaussppError:
-                    continue  # a clear error is acceptable
-            warned = _realizability_warned(caught)
-            assert warned or np.max(np.abs(res.a - ref)) <= 1e-8 * np.max(np.abs(ref)), (stretch, solver)
+    for phi in (0.7, 0.0):  # φ = 0: the rows stay dependent off the manifold
+        for stretch in (0.0, 1e-10, 1e-8, 2e-8, 1e-6, 1e-4, 1e-2):  # on the manifold, and drifts off it
+            q, v = redundant.pendulum_state(phi, 1.3, stretch=stretch)
+            ref = scene.model.step(0.0, q, v, solver="direct").a
+            for solver in ("direct", "qp"):
+                with warnings.catch_warnings(record=True) as caught:
+                    warnings.simplefilter("always")
+                    try:
+                        res = model.step(0.0, q, v, solver=solver)
+                    except gp.GaussppError:
+                        continue  # a clear error is acceptable
+                err = np.max(np.abs(res.a - ref)) / np.max(np.abs(ref))
+                if stretch == 0.0:
+                    assert err <= _REDUNDANT_EXACT, (phi, solver)
+                elif not _realizability_warned(caught):  # no further off than the state's own drift
+                    assert err <= min(1e-7, 2.0 * stretch), (phi, stretch, solver, err)
 
 
-def test_redundant_constraints_on_the_manifold_raise_naming_the_redundancy() -> None:
-    _, model = redundant.pendulum_with_distance()
+def test_redundant_constraints_on_the_manifold_direct_raises_and_qp_answers() -> None:
+    scene, model = redundant.pendulum_with_distance()
     for phi in (0.0, 0.3, 0.7, 2.5):  # formerly decided by round-off: errors at some angles, answers at others
         q, v = redundant.pendulum_state(phi, 1.3)
-        for solver in ("direct", "qp"):
-            with pytest.raises(gp.RealizabilityError, match=r"'pin-x', 'pin-z', 'distance'.*redundant"):
-                model.step(0.0, q, v, solver=solver)
+        with pytest.raises(gp.RealizabilityError, match=r"'pin-x', 'pin-z', 'distance'.*redundant.*solver='qp'"):
+            model.step(0.0, q, v, solver="direct")
+        ref = scene.model.step(0.0, q, v, solver="direct")
+        res = model.step(0.0, q, v, solver="qp")
+        assert res.solver.startswith("gauss-qp:")
+        assert np.max(np.abs(res.a - ref.a)) <= _REDUNDANT_EXACT * np.max(np.abs(ref.a)), phi
+        least_norm = redundant.least_norm_multiplier(model, q, v, ref.a)
+        assert np.max(np.abs(res.u - least_norm)) <= _REDUNDANT_EXACT * np.max(np.abs(least_norm)), phi
+
+
+def test_redundant_rows_that_contradict_each_other_raise() -> None:
+    _, model = redundant.pendulum_with_distance()
+    # φ = 0, x stretched: the distance row stays parallel to pin-x's, its right-hand side disagrees
+    q, v = redundant.pendulum_state(0.0, 1.3, stretch=1e-4)
+    with pytest.raises(gp.RealizabilityError, match=r"'pin-x', 'pin-z', 'distance'.*redundant"):
+        model.step(0.0, q, v, solver="direct")
+    with pytest.raises(gp.RealizabilityError, match=r"dependent and contradict each other"):
+        model.step(0.0, q, v, solver="qp")
+    # on the manifold with a velocity across it: the second-order right-hand sides disagree by ε²
+    q, v = redundant.pendulum_state(0.7, 1.3)
+    v = v + 1e-2 * np.array([math.cos(0.7), math.sin(0.7), 0.0])
+    with pytest.raises(gp.RealizabilityError, match=r"dependent and contradict each other"):
+        model.step(0.0, q, v, solver="qp")
+
+
+def test_redundant_nearly_dependent_rows_qp_error_names_the_redundancy() -> None:
+    _, model = redundant.pendulum_with_distance()
+    q, v = redundant.pendulum_state(0.7, 1.3, stretch=1e-6)
+    with pytest.raises(gp.RealizabilityError, match=r"'pin-x', 'pin-z', 'distance'.*redundant"):
+        model.step(0.0, q, v, solver="qp")
 
 
 def test_redundant_constraints_with_projection_fail_with_project_errors() -> None:

@@ -26,14 +26,26 @@ _MODULES: dict[str, str] = {
     "stiff-chain": "stiff_chain",
     "pendulum": "pendulum",
     "andrews": "andrews",
+    "block-on-floor": "block_on_floor",
+    "bouncing-pendulum": "bouncing_pendulum",
 }
 
-__all__ = ["Scene", "describe", "get", "names"]
+#: Scenes whose step is not a square equality system (contacts, bounded or extra actuators, redundant
+#: rows): only the general Gauss QP steps them, so studies that compare the direct formula skip them.
+GENERAL = ("block-on-floor", "bouncing-pendulum", "saturated-crane", "two-actuator-servo", "four-bar-redundant")
+
+__all__ = ["GENERAL", "Scene", "describe", "get", "names"]
 
 
-def names() -> list[str]:
-    """Names of every scene."""
-    return list(_MODULES)
+def names(kind: str = "all") -> list[str]:
+    """Names of the scenes: ``"all"``, ``"equality"`` (the direct formula applies) or ``"general"``."""
+    if kind == "all":
+        return list(_MODULES)
+    if kind == "equality":
+        return [n for n in _MODULES if n not in GENERAL]
+    if kind == "general":
+        return [n for n in _MODULES if n in GENERAL]
+    raise UnknownNameError(f"scene kind {kind!r} is unknown; use 'all', 'equality' or 'general'")
 
 
 def _builder(name: str) -> Callable[..., Scene]:

@@ -1,0 +1,106 @@
+"""A block dropped on a floor: impacts with restitution, then resting contact (issue 7).
+
+A planar rigid block (width ``w``, height ``h``, mass ``m``, central moment of inertia
+``m(w² + h²)/12``) with coordinates ``q = (x, z, θ)`` under gravity ``g``; its two bottom corners
+``(±w/2, −h/2)`` (body axes) must stay above the floor:
+
+    ``corner±: z ± (w/2) sin θ − (h/2) cos θ ≥ 0``     (Unilateral, restitution ``e``).
+
+Dropped flat (``tilt = 0``) from height ``z0 − h/2`` with zero vertical speed, both corners hit
+together and the block bounces like a point mass. Closed form: impact speeds ``v_k = eᵏ v₁``
+with ``v₁ = √(2 g H)``, impact times ``t₁ = √(2H/g)``, ``t_{k+1} = t_k + 2 v_k/g``, apex heights
+``eᵏ`` ... ``H_k = e^{2k} H``; the bounces accumulate at ``t_∞ = t₁ + 2 e v₁ / (g (1 − e))``,
+after which the block rests with contact force ``m g`` (``m g / 2`` per corner). ``exact`` gives
+that motion (the rest of the Zeno sequence included). With a tilt the block rocks (no closed form).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from ..constraints import Unilateral
+from ..errors import InputError
+from ..frontends import Lagrangian
+from ..model import Model
+from ._scene import Scene
+
+
+def bounce_times(height: float, e: float, g: float, count: int) -> np.ndarray:
+    """Closed-form times of the first ``count`` impacts of a point dropped from rest from ``height``."""
+    v1 = np.sqrt(2.0 * g * height)
+    times = [np.sqrt(2.0 * height / g)]
+    for k in range(1, count):
+        times.append(times[-1] + 2.0 * e**k * v1 / g)
+    return np.array(times)
+
+
+def build(
+    m: float = 1.0,
+    w: float = 0.4,
+    h: float = 0.2,
+    g: float = 9.81,
+    e: float = 0.5,
+    drop: float = 1.0,
+    tilt: float = 0.0,
+    vx: float = 0.0,
+    t_end: float = 3.0,
+) -> Scene:
+    """Planar block dropped on a floor: its corners bounce with restitution e, then it rests."""
+    if not (m > 0 and w > 0 and h > 0 and g > 0):
+        raise InputError(f"block-on-floor: m, w, h and g must be positive, got m={m}, w={w}, h={h}, g={g}")
+    if not 0 <= e <= 1:
+        raise InputError(f"block-on-floor: the restitution e must lie in [0, 1], got {e}")
+    if not (drop >= 0 and t_end > 0):
+        raise InputError(f"block-on-floor: need drop ≥ 0 and t_end > 0, got drop={drop}, t_end={t_end}")
+    if not abs(tilt) < np.pi / 2:
+        raise InputError(f"block-on-floor: |tilt| must be below π/2, got {tilt}")
+    inertia = m * (w * w + h * h) / 12.0
+    body = Lagrangian(
+        n=3,
+        T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2) + 0.5 * inertia * v[2] ** 2,
+        V=lambda q, t: m * g * q[1],
+    )
+    corners = [
+        Unilateral(
+            lambda q, t, s=s: q[1] + s * 0.5 * w * ca.sin(q[2]) - 0.5 * h * ca.cos(q[2]), name=name, restitution=e
+        )
+        for s, name in ((1.0, "corner+"), (-1.0, "corner-"))
+    ]
+    model = Model(body, corners)
+    # the lower corner starts `drop` above the floor
+    z0 = drop + 0.5 * w * abs(np.sin(tilt)) + 0.5 * h * np.cos(tilt)
+    q0, v0 = np.array([0.0, z0, tilt]), np.array([vx, 0.0, 0.0])
+    exact = None
+    if tilt == 0.0:
+        v1 = np.sqrt(2.0 * g * drop)
+        t_inf = np.sqrt(2.0 * drop / g) + (2.0 * e * v1 / (g * (1.0 - e)) if e < 1 else np.inf)
+
+        def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
+            t = float(t)
+            z0_ = 0.5 * h
+            if t >= t_inf:
+                return np.array([vx * t, z0_, 0.0]), np.array([vx, 0.0, 0.0])
+            t1 = np.sqrt(2.0 * drop / g)
+            if t < t1:
+                return np.array([vx * t, z0 - 0.5 * g * t * t, 0.0]), np.array([vx, -g * t, 0.0])
+            start, k = t1, 1
+            while True:  # flight k starts at impact k with upward speed e^k v1
+                up = e**k * v1
+                if t < start + 2.0 * up / g or up == 0.0:
+                    s = t - start
+                    return np.array([vx * t, z0_ + up * s - 0.5 * g * s * s, 0.0]), np.array([vx, up - g * s, 0.0])
+                start, k = start + 2.0 * up / g, k + 1
+
+    return Scene(
+        name="block-on-floor",
+        model=model,
+        q0=q0,
+        v0=v0,
+        lam0=None,
+        t_end=t_end,
+        exact=exact,
+        description="planar block dropped on a floor: two unilateral corner contacts, impacts with restitution e, "
+        "then rest",
+        params=dict(m=m, w=w, h=h, g=g, e=e, drop=drop, tilt=tilt, vx=vx, t_end=t_end),
+    )
