@@ -117,8 +117,7 @@ class GeneralRightHandSide:
             self.stab if stabilized else np.zeros(2),
             consistency_tol=DRIFT_CONSISTENCY_TOL,
         )
-        data = m._general_data(float(t), y[sq], y[sv], y[sl], np.zeros(2))
-        A, J, D = data[0], data[3].reshape(m.k, m.nv), data[5].reshape(m.nv, m.m)
+        A, J, D = extras.pop("A"), extras.pop("J"), extras.pop("D")
         Jt = np.linalg.solve(np.linalg.cholesky(A), J.T).T
         W = np.linalg.solve(np.linalg.cholesky(A), D)
         with np.errstate(divide="ignore", invalid="ignore"):

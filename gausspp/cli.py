@@ -214,7 +214,11 @@ def _label(name: str, params: dict[str, Any]) -> str:
 
 
 def _realizations(model: Model) -> str:
-    return ", ".join(f"{n}: {c.realization.label}" for n, c in zip(model.names, model.constraints, strict=True))
+    parts = [f"{n}: {c.realization.label}" for n, c in zip(model.names, model.constraints, strict=True)]
+    parts += [
+        f"{n}: unilateral, e = {c.restitution:g}" for n, c in zip(model.contact_names, model.contacts, strict=True)
+    ]
+    return ", ".join(parts)
 
 
 def _vector(x: np.ndarray) -> str:
@@ -351,6 +355,61 @@ def _demo_scenes() -> None:
     print(
         "\nQP vs direct: largest state difference (relative) along the whole run; (23) gap: relative gap of the\n"
         "integral principle for the direct run's path — zero up to discretization iff the path is a motion."
+    )
+    _demo_general()
+
+
+def _demo_general() -> None:
+    """Scenes without a closed-form step: contacts, bounded or extra actuators, redundant rows (general QP)."""
+    from .gauss_qp import default_backend
+    from .simulate import simulate
+
+    print(f"\nBeyond closed forms — the general Gauss QP ({default_backend()} and osqp), DOP853 rtol 1e-11:\n")
+    header = (
+        f"{'scene':19s} {'what':28s} {'T':>5s} {'events':>6s} {'saturated':>9s} {'daqp vs osqp':>12s} "
+        f"{'|Φ|,|g| max':>11s} {'energy bal.':>11s} {'vs exact':>9s} {'run ms':>7s}"
+    )
+    print(header)
+    print("-" * len(header))
+    for name in scenes.names("general"):
+        scene = scenes.get(name)
+        model = scene.model
+        T = min(scene.t_end, 3.0)
+        grid = np.linspace(0.0, T, 201)
+        kwargs: dict[str, Any] = dict(lam0=scene.lam0, method="DOP853", rtol=1e-11, atol=1e-13, record=grid)
+        if "stabilize" in scene.params:
+            kwargs["stabilize"] = scene.params["stabilize"]
+        elif model.bounded:
+            kwargs["stabilize"] = "baumgarte"
+        start = time.perf_counter()
+        first = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{default_backend()}", **kwargs)
+        run_ms = (time.perf_counter() - start) * 1e3
+        other = simulate(model, scene.q0, scene.v0, T, backend="qpsolvers:osqp", **kwargs)
+        on_grid = [np.flatnonzero(np.isin(traj.t, grid) & np.r_[np.diff(traj.t) > 0, True]) for traj in (first, other)]
+        diff = float(np.abs(first.q[on_grid[0]] - other.q[on_grid[1]]).max())
+        redundant = first.solver.startswith("gauss-qp") and not (model.bounded or model.contacts or model.m > model.k)
+        features = [
+            f"{len(model.contacts)} contact(s)" if model.contacts else "",
+            "bounded" if model.bounded else "",
+            f"{model.m} actuators, {model.k} row(s)" if model.m > model.k else "",
+            "redundant rows" if redundant else "",
+        ]
+        what = ", ".join(f for f in features if f)
+        balance = np.abs(first.energy_balance())
+        energy = f"{np.nanmax(balance):.1e}" if np.isfinite(balance).any() else "—"
+        exact = "—"
+        if scene.exact is not None:
+            exact = (
+                f"{max(float(np.abs(scene.exact(t)[0] - q).max()) for t, q in zip(first.t, first.q, strict=True)):.1e}"
+            )
+        saturated = f"{first.saturated.any(axis=1).mean():.0%}" if model.bounded else "—"
+        print(
+            f"{name:19s} {what:28s} {T:5.3g} {len(first.events):6d} {saturated:>9s} {diff:12.1e} "
+            f"{first.max_residual():11.1e} {energy:>11s} {exact:>9s} {run_ms:7.0f}"
+        )
+    print(
+        "\nevents: impacts, lift-offs and touch-downs located by the integrator; saturated: share of samples with an "
+        "actuator at its bound;\ndaqp vs osqp: largest difference of q on a common grid of 201 times."
     )
 
 
@@ -508,6 +567,18 @@ def _summary(scene: scenes.Scene, traj: Trajectory, wall: float, dt: float | Non
         )
         if traj.margin.size:
             rows.append(("margin", f"{traj.margin.min():.4g} … {traj.margin.max():.4g} (realizability, σ_min of S)"))
+        if traj.events:
+            kinds = {
+                k: sum(ev["kind"] == k for ev in traj.events) for k in dict.fromkeys(ev["kind"] for ev in traj.events)
+            }
+            rows.append(("events", ", ".join(f"{n} {k}" for k, n in kinds.items())))
+        if traj.contact_force.shape[1]:
+            rows.append(("contact force", f"{_vector(traj.contact_force[-1])} at the end"))
+        if traj.saturated.size and traj.saturated.any():
+            share = traj.saturated.any(axis=1).mean()
+            rows.append(
+                ("saturation", f"{share:.0%} of the samples, tracking error up to {traj.tracking_error.max():.3g}")
+            )
         if scene.exact is not None and traj.success:
             q_ex, v_ex = scene.exact(float(traj.t[-1]))
             err = float(np.abs(np.concatenate([traj.q[-1] - q_ex, traj.v[-1] - v_ex])).max())

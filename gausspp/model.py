@@ -27,7 +27,7 @@ from .errors import (
 )
 from .frontends import Mechanism
 from .gauss_qp import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, solve_general
-from .kernel import Kernel, build_kernel
+from .kernel import Kernel, _Bound, _dense, _load, build_kernel
 from .problem import StepProblem
 from .realizability import cosines
 from .results import ImpactResult, StepResult
@@ -111,7 +111,7 @@ class Model:
         self._assemble_contacts()
         #: True if some realization has bounds on its reaction (bounded servo, :class:`~gausspp.Force`).
         self.bounded = any(c.realization.bounds is not None for c in self.constraints)
-        self._general_fn: ca.Function | None = None
+        self._general_fn: _Bound | None = None
         self._kernels: dict[tuple[str, str | None], Kernel] = {}
         self._data_fn: ca.Function | None = None
         self._projection: ca.Function | None = None
@@ -346,7 +346,7 @@ class Model:
             gc, Jc, phic, gdotc = self._contact_expressions
             power = ca.dot(mech.v, mech.F_nc) if mech.F_nc is not None else ca.SX(0)
             energy = mech.energy if mech.energy is not None else ca.SX(0)
-            self._general_fn = ca.Function(
+            fn = ca.Function(
                 "general_data",
                 self._inputs,
                 [
@@ -367,7 +367,11 @@ class Model:
                     gdotc,
                 ],
             )
-        return [np.array(x) for x in self._general_fn(t, q, v, lam, stab)]
+            self._general_fn = _Bound(ca.Function("general_data", self._inputs, _dense(fn.call(self._inputs))))
+        bound = self._general_fn
+        _load(bound.args, (t, q, v, lam, stab))
+        bound.eval()
+        return [r.reshape(bound.fn.size_out(i), order="F").copy() for i, r in enumerate(bound.res)]
 
     def closed_contacts(self, t: float, q: Any, v: Any, lam: Any = None) -> np.ndarray:
         """Indices of the contact rows that are closed at the state (``|g| ≤ contact_tol``)."""
@@ -479,6 +483,9 @@ class Model:
             "power_forces": power.ravel(),
             "power_reaction": np.array([float(v @ reaction)]),
             "g": g.ravel(),
+            "A": A,
+            "J": J.reshape(self.k, self.nv),
+            "D": D.reshape(self.nv, m),
         }
         return result, sol, extras
 

@@ -67,9 +67,25 @@ def test_readme_simulation_snippet_runs() -> None:
     import gausspp as gp
 
     text = (ROOT / "README.md").read_text()
-    blocks = re.findall(r"```python\n(.*?)```", text, re.S)
-    assert len(blocks) >= 2
+    blocks = [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "gyrostat" in b]
+    assert len(blocks) == 1
     namespace: dict[str, object] = {"gp": gp}
-    exec(compile(blocks[1], "README.md", "exec"), namespace)
+    exec(compile(blocks[0], "README.md", "exec"), namespace)
     traj = namespace["traj"]
     assert traj.success and abs(traj.energy_balance()).max() < 1e-11  # type: ignore[attr-defined]
+
+
+def test_readme_contact_snippet_runs_and_says_what_it_computes() -> None:
+    import gausspp as gp
+
+    text = (ROOT / "README.md").read_text()
+    blocks = [b for b in re.findall(r"```python\n(.*?)```", text, re.S) if "gp.Unilateral" in b]
+    assert len(blocks) == 1
+    namespace: dict[str, object] = {"gp": gp}
+    exec(compile(blocks[0], "README.md", "exec"), namespace)
+    traj = namespace["traj"]
+    impacts = [ev["t"] for ev in traj.events if ev["kind"] == "impact"][:3]  # type: ignore[attr-defined]
+    t1 = (2 / 9.81) ** 0.5
+    assert impacts == pytest.approx([t1, t1 * 2, t1 * 2.5], abs=1e-12)  # the times the comment quotes
+    assert [f"{t:.4f}" for t in impacts] == ["0.4515", "0.9030", "1.1288"]
+    assert traj.contact_force[-1] == pytest.approx([9.81], rel=1e-12)  # type: ignore[attr-defined]

@@ -21,6 +21,7 @@ OPTIONS: dict[str, dict[str, Any]] = {
     "proxqp": {"eps_abs": 1e-12, "eps_rel": 0.0},
     "clarabel": {"tol_gap_abs": 1e-12, "tol_gap_rel": 1e-12, "tol_feas": 1e-12},
     "piqp": {"eps_abs": 1e-12, "eps_rel": 1e-12},
+    "daqp": {"primal_tol": 1e-12, "dual_tol": 1e-12},
 }
 
 

@@ -28,6 +28,9 @@ _MODULES: dict[str, str] = {
     "andrews": "andrews",
     "block-on-floor": "block_on_floor",
     "bouncing-pendulum": "bouncing_pendulum",
+    "saturated-crane": "saturated_crane",
+    "two-actuator-servo": "two_actuator_servo",
+    "four-bar-redundant": "four_bar",
 }
 
 #: Scenes whose step is not a square equality system (contacts, bounded or extra actuators, redundant

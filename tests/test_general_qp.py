@@ -1,0 +1,159 @@
+"""The general Gauss QP (gausspp.gauss_qp) and the model features built on it: errors and edge cases."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+import gausspp as gp
+from gausspp.gauss_qp import GaussProblem, check_backend, default_backend, solve_general
+
+BACKENDS = ["daqp", "osqp"]
+
+
+def _problem(**changes: object) -> GaussProblem:
+    A = np.diag([1.0, 2.0, 3.0])
+    J = np.array([[1.0, 1.0, 0.0]])
+    data = dict(
+        A=A,
+        a0=np.array([0.0, -1.0, 0.5]),
+        D=J.T,
+        J=J,
+        phi=np.array([0.3]),
+        kind=["eq"],
+        lower=np.array([-np.inf]),
+        upper=np.array([np.inf]),
+    )
+    data.update(changes)
+    return GaussProblem(**data)  # type: ignore[arg-type]
+
+
+def test_problem_shapes_and_values_are_checked() -> None:
+    with pytest.raises(gp.ShapeError, match="phi has shape"):
+        _problem(phi=np.zeros(2))
+    with pytest.raises(gp.ShapeError, match="kind needs one of"):
+        _problem(kind=["equal"])
+    with pytest.raises(gp.NonFiniteError, match="a0 is not finite"):
+        _problem(a0=np.array([0.0, np.nan, 0.0]))
+    with pytest.raises(gp.ShapeError, match="lower bound exceeds"):
+        _problem(lower=np.array([1.0]), upper=np.array([0.0]))
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_mass_matrix_that_is_not_positive_definite(backend: str) -> None:
+    with pytest.raises(gp.NotPositiveDefiniteError, match="not positive definite at t=0.5"):
+        solve_general(_problem(A=np.diag([1.0, -2.0, 3.0]), t=0.5), backend)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_a_realization_that_cannot_keep_its_constraint(backend: str) -> None:
+    # force along the third axis, constraint on the first two: J A⁻¹ D = 0 (condition (12) fails)
+    with pytest.raises(gp.RealizabilityError, match=r"cannot keep the constraint.*rank 0 < rank J = 1") as info:
+        solve_general(_problem(D=np.array([[0.0], [0.0], [1.0]]), rows=["servo"], t=2.0), backend)
+    assert info.value.t == 2.0 and info.value.constraint == "servo"
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_dependent_rows_that_contradict_each_other(backend: str) -> None:
+    J = np.array([[1.0, 1.0, 0.0], [2.0, 2.0, 0.0]])
+    p = _problem(
+        J=J, D=J.T, phi=np.array([0.3, 0.7]), kind=["eq", "eq"], lower=np.full(2, -np.inf), upper=np.full(2, np.inf)
+    )
+    with pytest.raises(gp.RealizabilityError, match="dependent and contradict each other"):
+        solve_general(p, backend)
+    consistent = solve_general(
+        _problem(
+            J=J, D=J.T, phi=np.array([0.3, 0.6]), kind=["eq", "eq"], lower=np.full(2, -np.inf), upper=np.full(2, np.inf)
+        ),
+        backend,
+    )
+    single = solve_general(_problem(), backend)
+    assert consistent.redundant_rows == 1 and np.allclose(consistent.a, single.a, atol=1e-14)
+    assert consistent.u == pytest.approx(single.u[0] * np.array([1.0, 2.0]) / 5.0, abs=1e-12)  # least norm
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_contacts_that_cannot_all_hold_are_a_clear_qp_error(backend: str) -> None:
+    # an equality a₁ + a₂ = 0.3 with both accelerations pushed ≥ 1 by "contacts" with no force: infeasible
+    J = np.array([[1.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    D = np.array([[1.0, 1.0, 0.0]]).T
+    p = _problem(J=J, D=D, phi=np.array([0.3, 1.0, 1.0]), kind=["eq", "ge", "ge"])
+    with pytest.raises(gp.QPSolveError, match=r"contradict each other|violates"):
+        solve_general(p, backend)
+
+
+def test_backend_names() -> None:
+    assert check_backend(None) == default_backend() == "daqp"
+    assert check_backend("qpsolvers:osqp") == "osqp" and check_backend("casadi:osqp") == "osqp"
+    assert check_backend("casadi:qrqp") == default_backend()  # no qpsolvers counterpart: the default
+    with pytest.raises(gp.UnknownNameError, match="not a qpsolvers solver installed here"):
+        check_backend("gurobi")
+
+
+def _point() -> gp.Lagrangian:
+    return gp.Lagrangian(n=2, T=lambda q, v, t: 0.5 * ca.sumsqr(v), V=lambda q, t: 9.81 * q[1])
+
+
+def _servo(**force: object) -> gp.Model:
+    realization = gp.Force(lambda q, v, t: [0, 1], **force)  # type: ignore[arg-type]
+    return gp.Model(_point(), [gp.Holonomic(lambda q, t: q[1] - ca.sin(t), name="track", realization=realization)])
+
+
+def test_force_bounds_are_checked() -> None:
+    with pytest.raises(gp.InputError, match=r"bounds must be a pair"):
+        gp.Force(lambda q, v, t: [0, 1], bounds=5.0)
+    with pytest.raises(gp.NonFiniteError, match="bounds contain NaN"):
+        gp.Force(lambda q, v, t: [0, 1], bounds=(np.nan, 1.0))
+    with pytest.raises(gp.InputError, match="lower bound exceeds"):
+        _servo(bounds=(2.0, 1.0))
+    with pytest.raises(gp.ShapeError, match="1 or 1 entries"):
+        _servo(bounds=([-1.0, -2.0], 1.0))
+    with pytest.raises(gp.ShapeError, match="fewer actuators than constraint rows"):
+        gp.Model(_point(), [gp.Holonomic(lambda q, t: q, name="both", realization=gp.Force(lambda q, v, t: [0, 1]))])
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_bounded_servo_saturates_exactly_when_its_force_would_exceed_the_bound(backend: str) -> None:
+    model = _servo(bounds=(-9.5, 9.5))
+    for t in np.linspace(0.0, 6.0, 25):
+        q, v = [0.0, np.sin(t)], [0.0, np.cos(t)]
+        needed = 9.81 - np.sin(t)  # ÿ = −sin t = −g + λ
+        res = model.step(t, q, v, backend=backend)
+        if needed > 9.5 + 1e-9:
+            assert res.saturated[0] and res.u[0] == pytest.approx(9.5, abs=1e-9)
+            assert res.tracking_error == pytest.approx(needed - 9.5, rel=1e-8)  # one row: |J a − φ| / |J|_A⁻¹
+        elif needed < 9.5 - 1e-9:
+            assert not res.saturated[0] and res.tracking_error == 0.0
+            assert res.u[0] == pytest.approx(needed, abs=1e-9) and np.max(np.abs(res.residual)) <= 1e-12
+
+
+def test_bounded_models_refuse_the_direct_and_compiled_routes() -> None:
+    model = _servo(bounds=(-9.5, 9.5))
+    with pytest.raises(gp.InputError, match="solver='qp'"):
+        model.step(0.0, [0, 0], [0, 1], solver="direct")
+    with pytest.raises(gp.InputError, match="solver='qp'"):
+        gp.simulate(model, [0, 0], [0, 1], 1.0, dt=0.01, solver="direct")
+    with pytest.raises(gp.InputError, match="compiled step"):
+        gp.simulate(model, [0, 0], [0, 1], 1.0, dt=0.01, method="rk4-compiled")
+
+
+def test_bounded_simulation_records_saturation_and_keeps_the_bound() -> None:
+    model = _servo(bounds=(-9.5, 9.5))
+    traj = gp.simulate(model, [0, 0], [0, 1], 6.0, dt=0.01, stabilize="baumgarte")
+    assert traj.success and np.all(np.abs(traj.u) <= 9.5 + 1e-12)
+    assert traj.saturated.any() and not traj.saturated.all()
+    assert np.all((traj.tracking_error > 0) == traj.saturated[:, 0])
+    assert traj.solver == f"gauss-qp:{default_backend()}"
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_over_actuated_step_is_the_least_compulsion_allocation(backend: str) -> None:
+    rows = [[0.0, 1.0], [1.0, 1.0]]
+    realization = gp.Force(lambda q, v, t: rows)
+    model = gp.Model(_point(), [gp.Holonomic(lambda q, t: q[1] - ca.sin(t), name="track", realization=realization)])
+    res = model.step(1.0, [0.0, np.sin(1.0)], [0.0, np.cos(1.0)], backend=backend)
+    # the pure vertical thruster does it alone: the slanted one would push x too, adding compulsion
+    assert res.u == pytest.approx([9.81 - np.sin(1.0), 0.0], abs=1e-9)
+    with pytest.raises(gp.InputError, match="solver='qp'"):
+        model.step(1.0, [0.0, np.sin(1.0)], [0.0, np.cos(1.0)], solver="direct")
