@@ -8,7 +8,7 @@ compulsion as a QP and is cross-checked against the direct multiplier solution.
 
 from __future__ import annotations
 
-from . import methods, plot, qp, realizability, report, scenes
+from . import methods, plot, qp, realizability, report, scenes, sweeps
 from .constraints import Constraint, Holonomic, Unilateral
 from .drift import Baumgarte
 from .errors import (
@@ -33,6 +33,7 @@ from .problem import StepProblem, solve
 from .realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
 from .results import StepResult
 from .simulate import simulate
+from .sweeps import sweep
 from .trajectory import Trajectory
 
 __version__ = "0.1.0"
@@ -77,6 +78,8 @@ __all__ = [
     "report",
     "scenes",
     "simulate",
+    "sweep",
+    "sweeps",
     "solve",
     "verify",
 ]

@@ -748,23 +748,44 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"gausspp: error: {_one_line(message)} (see '{self.prog} --help')\n")
 
 
+_SWEEP_ONLY = {
+    "realizability": ("resolution",),
+    "work-precision": ("scenes", "methods", "solvers", "full", "repeats"),
+}
+
+
 def sweep(args: argparse.Namespace) -> int:
     """A parameter sweep on local worker processes, appended to --out as it runs (resumable)."""
-    from concurrent.futures import ProcessPoolExecutor
+    from concurrent.futures import Executor, ProcessPoolExecutor
 
-    from . import sweep as sw
+    for study, options in _SWEEP_ONLY.items():
+        for option in options:
+            if study != args.study and getattr(args, option) is not None:
+                raise UsageError(f"--{option} applies to `gausspp sweep {study}` only")
+    pool: Executor | None = ProcessPoolExecutor(args.workers) if args.workers > 1 else None
+    try:
+        if args.study == "realizability":
+            return _sweep_realizability(args, pool or "serial")
+        return _sweep_work_precision(args, pool or "serial")
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
 
-    if not (np.isfinite(args.resolution) and 0 < args.resolution <= 30):
-        raise UsageError(f"--resolution is a grid step in degrees, 0 < R ≤ 30; got {args.resolution}")
-    step = args.resolution
+
+def _workers_text(args: argparse.Namespace) -> str:
+    return f"{args.workers} worker{'s' if args.workers > 1 else ''}"
+
+
+def _sweep_realizability(args: argparse.Namespace, executor: Any) -> int:
+    from . import sweeps
+
+    step = 2.0 if args.resolution is None else args.resolution
+    if not (np.isfinite(step) and 0 < step <= 30):
+        raise UsageError(f"--resolution is a grid step in degrees, 0 < R ≤ 30; got {step}")
     lon = np.linspace(-180.0, 180.0, int(round(360 / step)) + 1)
     lat = np.linspace(-90.0, 90.0, int(round(180 / step)) + 1)
-    params = sw.grid(lat=[float(x) for x in lat], lon=[float(x) for x in lon])
-    if args.workers == 1:
-        res = sw.sweep(sw.realizability_task, params, executor="serial", out=args.out, progress=not args.quiet)
-    else:
-        with ProcessPoolExecutor(args.workers) as pool:
-            res = sw.sweep(sw.realizability_task, params, executor=pool, out=args.out, progress=not args.quiet)
+    params = sweeps.grid(lat=[float(x) for x in lat], lon=[float(x) for x in lon])
+    res = sweeps.sweep(sweeps.realizability_task, params, executor=executor, out=args.out, progress=not args.quiet)
     margin = res.column("margin")
     k = int(np.nanargmin(margin)) if np.isfinite(margin).any() else 0
     print(
@@ -773,7 +794,7 @@ def sweep(args: argparse.Namespace) -> int:
     )
     print(
         f"computed {res.computed} in {res.wall_time:.2f} s ({res.tasks_per_second:.0f} tasks/s, "
-        f"{args.workers} worker{'s' if args.workers > 1 else ''}); failed: {len(res.errors)}"
+        f"{_workers_text(args)}); failed: {len(res.errors)}"
     )
     print(
         f"smallest margin {margin[k]:.3e} at lon {params[k]['lon']:g}°, lat {params[k]['lat']:g}°; "
@@ -781,6 +802,56 @@ def sweep(args: argparse.Namespace) -> int:
     )
     if args.out:
         print(f"written: {args.out} (JSON lines; run again to resume)")
+    return 0 if res.ok else 1
+
+
+def _sweep_work_precision(args: argparse.Namespace, executor: Any) -> int:
+    from . import report as study
+    from . import sweeps
+
+    solvers = args.solvers
+    if solvers:
+        known = ["direct", *qp.names()]
+        for solver in solvers:
+            if solver not in known:
+                raise UsageError(f"--solvers: {solver!r} is unknown; use {', '.join(known)}")
+    repeats = 2 if args.repeats is None else args.repeats
+    out = Path(args.out or "report")
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out for work-precision is a directory; {str(out)!r} is a file")
+    log = out / "work_precision.jsonl"
+    rows, res = sweeps.work_precision(
+        args.scenes or None,
+        args.methods or None,
+        solvers or None,
+        quick=not args.full,
+        repeats=repeats,
+        executor=executor,
+        out=log,
+        progress=not args.quiet,
+    )
+    print(study.table(rows))
+    print("\nFastest run reaching a final-state error ≤ 1e-10, per scene:")
+    for scene, row in study.best_per_scene(rows).items():
+        shown = (
+            "none"
+            if row is None
+            else f"{row.method} · {row.solver} · {row.setting}: {row.final_error:.1e} in {row.wall_time:.4f} s"
+        )
+        print(f"  {scene:20s} {shown}")
+    files = [log, *study.write(rows, out)]
+    try:
+        from . import plot
+
+        files += plot.save_work_precision(rows, out)
+    except GaussppError as exc:  # matplotlib missing: the table and data are still written
+        print(f"(no plots: {exc})")
+    print(
+        f"\n{len(rows)} runs; computed {res.computed} of {len(res)} tasks in {res.wall_time:.1f} s "
+        f"({_workers_text(args)}{'; wall times measured side by side in the workers' if args.workers > 1 else ''}); "
+        f"failed tasks: {len(res.errors)}"
+    )
+    print(f"written: {', '.join(str(f) for f in files)} (run again with the same --out to resume)")
     return 0 if res.ok else 1
 
 
@@ -900,6 +971,17 @@ examples:
   gausspp verify skate --check-param realization=vakonomic --expect not-motion"""
 
 
+_SWEEP = """\
+Run a sweep on local worker processes. With --out every result is appended as
+it arrives, and a second run with the same --out resumes: tasks already
+recorded are not run again. For a dask cluster use gausspp.sweep from Python.
+
+examples:
+  gausspp sweep realizability --resolution 1 --out margins.jsonl
+  gausspp sweep work-precision --out report
+  gausspp sweep work-precision --scenes pendulum crane --methods rk4-compiled DOP853 --solvers direct"""
+
+
 def _parser() -> argparse.ArgumentParser:
     common = _common()
     parser = _Parser(
@@ -980,19 +1062,57 @@ def _parser() -> argparse.ArgumentParser:
         "sweep",
         parents=[common],
         help="a parameter sweep on all local cores, saved as it runs (resumable)",
-        description="Run a sweep on local worker processes; with --out every result is appended as it arrives and "
-        "a second run with the same --out resumes. For a dask cluster use gausspp.sweep from Python.",
+        description=_SWEEP,
+        epilog=_EXIT_CODES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    swp.add_argument("study", choices=("realizability",), help="realizability: the servo margin over the sphere of n")
-    swp.add_argument("--resolution", type=float, default=2.0, metavar="R", help="grid step in degrees (default: 2)")
+    swp.add_argument(
+        "study",
+        choices=("realizability", "work-precision"),
+        help="realizability: the servo margin over the sphere of n; work-precision: the report's error against "
+        "run time, one task per run",
+    )
     swp.add_argument(
         "--workers",
         type=_positive(int),
         default=os.cpu_count() or 1,
         metavar="N",
-        help="worker processes (default: all)",
+        help="worker processes (default: all; 1 runs in this process)",
     )
-    swp.add_argument("--out", metavar="FILE", help="JSON-lines file of results (appended; resumes)")
+    swp.add_argument(
+        "--out",
+        metavar="PATH",
+        help="realizability: a JSON-lines FILE of results (appended; resumes). work-precision: a DIRECTORY "
+        "(default: report/) for work_precision.jsonl (the resumable log), the CSV/JSON and the plots",
+    )
+    swp.add_argument(
+        "--resolution",
+        type=float,
+        metavar="R",
+        help="realizability: grid step in degrees (default: 2)",
+    )
+    swp.add_argument(
+        "--scenes", nargs="+", metavar="SCENE", choices=scenes.names(), help="work-precision: only these scenes"
+    )
+    swp.add_argument(
+        "--methods",
+        nargs="+",
+        metavar="METHOD",
+        choices=methods.names(),
+        help="work-precision: only these methods (default: rk4 rk4-compiled DOP853 Radau cvodes)",
+    )
+    swp.add_argument(
+        "--solvers",
+        nargs="+",
+        metavar="SOLVER",
+        help=f"work-precision: direct and/or QP backends (default: direct {qp.DEFAULT} casadi:osqp)",
+    )
+    swp.add_argument(
+        "--full", action="store_true", default=None, help="work-precision: finer sweeps of steps and tolerances"
+    )
+    swp.add_argument(
+        "--repeats", type=_positive(int), metavar="N", help="work-precision: timing repeats, the minimum is kept (2)"
+    )
     swp.set_defaults(func=sweep)
     return parser
 

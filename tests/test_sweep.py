@@ -12,12 +12,20 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
-from gausspp.errors import InputError
-from gausspp.sweep import SweepError, grid, realizability_task, simulate_task, sweep
+from gausspp.errors import InputError, UnknownNameError
+from gausspp.sweeps import SweepError, SweepResult, grid, realizability_task, simulate_task, sweep
 
 ROOT = Path(__file__).resolve().parents[1]
+
+
+def _records(out: Path) -> list[dict[str, Any]]:
+    """The task records of a JSON-lines log (after its first line, which names the task)."""
+    lines = out.read_text().splitlines()
+    assert "task" in json.loads(lines[0]) and "index" not in json.loads(lines[0])
+    return [json.loads(line) for line in lines[1:] if line.endswith("}")]
 
 
 # -- tasks used by the tests: top level, so that worker processes can unpickle them --------------------
@@ -36,12 +44,20 @@ def failing_task(params: dict[str, Any]) -> dict[str, float]:
     return {"y": params["i"] / 3.0}
 
 
+def mixed_task(params: dict[str, Any]) -> dict[str, Any]:
+    """Numbers, a list and a string per task; fails at i=3."""
+    i = params["i"]
+    if i == 3:
+        raise RuntimeError("no result at i=3")
+    return {"y": i / 3.0, "vec": [i, 2.0 * i], "label": f"p{i}", "flag": i % 2 == 0}
+
+
 def _realizability_params() -> list[dict[str, Any]]:
     return grid(lon=[-150.0, -60.0, 0.0, 45.0, 120.0], lat=[-60.0, 0.0, 35.3, 80.0], inertia=[[1.0, 2.0, 3.0]])
 
 
 def _simulate_params() -> list[dict[str, Any]]:
-    return grid(omega0=[1.0], v_scale=[0.5, 1.0, 1.5], phi0=[0.0, 0.4], t_end=[0.02])
+    return grid(omega0=[1.0], v_scale=[0.5, 1.0, 1.5], phi0=[0.0, 0.4], t_end=[0.02], dt=[1e-3])
 
 
 def test_grid_is_the_cartesian_product_in_order() -> None:
@@ -79,7 +95,7 @@ def test_failed_task_is_recorded_and_the_others_complete(tmp_path: Path) -> None
     res = sweep(failing_task, grid(i=range(6)), executor="serial", out=out, progress=False)
     assert list(res.errors) == [3] and "ValueError: no good at i=3" in res.errors[3]
     assert res.results[3] is None and [r["y"] for r in res.results if r] == [i / 3.0 for i in (0, 1, 2, 4, 5)]
-    records = [json.loads(line) for line in out.read_text().splitlines()]
+    records = _records(out)
     assert sorted(r["index"] for r in records) == list(range(6))
     assert [r["error"] for r in records if "error" in r] == [res.errors[3]]
     # a resume keeps the recorded failure without running anything; retry_failed runs it again
@@ -107,7 +123,7 @@ def test_bad_arguments_name_the_parameter() -> None:
 
 _KILLED = """
 import sys
-from gausspp.sweep import grid, sweep
+from gausspp.sweeps import grid, sweep
 from tests.test_sweep import counted_task
 sweep(counted_task, grid(i=range({n}), log=[sys.argv[1]], sleep=[0.03]), chunk=1, out=sys.argv[2], progress=False)
 """
@@ -122,12 +138,12 @@ def test_killed_sweep_resumes_without_recomputing(tmp_path: Path) -> None:
     )
     try:
         deadline = time.monotonic() + 20
-        while time.monotonic() < deadline and (not out.exists() or len(out.read_text().splitlines()) < 8):
+        while time.monotonic() < deadline and (not out.exists() or len(out.read_text().splitlines()) < 9):
             time.sleep(0.01)
     finally:
         os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its pool workers, mid-flight
         proc.wait()
-    before = {json.loads(line)["index"] for line in out.read_text().splitlines() if line.endswith("}")}
+    before = {r["index"] for r in _records(out)}
     assert 8 <= len(before) < n, "the sweep must be killed midway"
     log.write_text("")
 
@@ -137,7 +153,7 @@ def test_killed_sweep_resumes_without_recomputing(tmp_path: Path) -> None:
     assert resumed.computed == n - len(before)
     uninterrupted = sweep(counted_task, params, executor="serial", progress=False)
     assert resumed.results == uninterrupted.results and resumed.ok
-    assert len({json.loads(line)["index"] for line in out.read_text().splitlines() if line.endswith("}")}) == n
+    assert len({r["index"] for r in _records(out)}) == n
 
 
 def test_cli_sweep_realizability_writes_and_resumes(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
@@ -146,7 +162,184 @@ def test_cli_sweep_realizability_writes_and_resumes(tmp_path: Path, capsys: pyte
     out = tmp_path / "map.jsonl"
     argv = ["sweep", "realizability", "--resolution", "10", "--workers", "1", "--out", str(out), "--quiet"]
     assert main(argv) == 0
-    assert "computed 703 " in capsys.readouterr().out and len(out.read_text().splitlines()) == 703
+    assert "computed 703 " in capsys.readouterr().out and len(_records(out)) == 703
     assert main(argv) == 0
     assert "computed 0 " in capsys.readouterr().out
     assert main(["sweep", "realizability", "--resolution", "0"]) == 2
+
+
+# -- the issue's spelling: gausspp.sweep(fn_or_scene, ...) ----------------------------------------------
+def test_gausspp_sweep_is_the_function_and_gausspp_sweeps_the_module() -> None:
+    import gausspp
+
+    assert gausspp.sweep is gausspp.sweeps.sweep and callable(gausspp.sweep)
+    res = gausspp.sweep(realizability_task, grid(lon=[0.0], lat=[10.0]), executor="serial", progress=False)
+    assert res.ok and res.column("margin").shape == (1,)
+
+
+def _pendulum_state(phi: float, omega: float) -> tuple[list[float], list[float]]:
+    c, s = np.cos(phi), np.sin(phi)  # the pendulum scene's q = (x, z, φ) with L = 1, on its pins
+    return [c, s, phi], [-s * omega, c * omega, omega]
+
+
+def test_scene_name_runs_the_default_scene_task(tmp_path: Path) -> None:
+    params = grid(omega0=[0.0, 0.7], t_end=[0.02])
+    by_name = sweep("pendulum", params, executor="serial", progress=False)
+    by_task = sweep(simulate_task, [{"scene": "pendulum", **p} for p in params], executor="serial", progress=False)
+    assert by_name.ok and by_name.results == by_task.results and by_name.params == params
+    assert set(by_name.results[0]) >= {"t_final", "steps", "residual", "energy_balance", "max_reaction", "min_margin"}
+    assert np.allclose(by_name.column("t_final"), 0.02) and np.all(by_name.column("steps") == 2000)  # dt = t_end/2000
+    assert np.all(by_name.column("q_error") < 1e-10)  # RK4 against the scene's reference motion
+    assert np.all(by_name.column("residual") < 1e-8)
+    # released level and at rest the pin carries m g Ic/(Ic + m L²) vertically, with its torque about the
+    # centre of mass: |R| = √2 · 9.81 · 0.01/1.01 at t = 0; it grows as the body swings and with ω (centripetal)
+    reaction = by_name.column("max_reaction")
+    assert np.sqrt(2) * 9.81 * 0.01 / 1.01 <= reaction[0] < 0.2 and reaction[1] > reaction[0]
+    assert by_name.column("q_end").shape == (2, 3)  # the final state, one row per task
+    # initial data through q0/v0 (one model for every sample): the run starts there, no exact motion claimed
+    q0, v0 = _pendulum_state(0.3, -0.4)
+    moved = sweep("pendulum", [{"q0": q0, "v0": v0, "t_end": 0.02}], executor="serial", progress=False)
+    assert moved.ok and "q_error" not in moved.results[0]
+    taylor = 0.3 - 0.4 * 0.02 - 0.5 * 9.81 * np.cos(0.3) / 1.01 * 0.02**2  # φ0 + ω0 t + ½ φ̈0 t², O(t³) ≈ 2e-6
+    assert moved.results[0]["q_end"][2] == pytest.approx(taylor, abs=1e-5)
+    # initial data off the constraints: a recorded failure, not a crash
+    off = sweep("pendulum", [{"q0": [0.0, 0.0, 0.0], "t_end": 0.02}], executor="serial", progress=False)
+    assert "InitialDataError" in off.errors[0]
+    # a log is bound to its task: another scene's sweep does not resume from it
+    out = tmp_path / "pendulum.jsonl"
+    sweep("pendulum", params[:1], executor="serial", out=out, progress=False)
+    with pytest.raises(SweepError, match="task 'scene:pendulum', not 'scene:two-masses'"):
+        sweep("two-masses", params[:1], executor="serial", out=out, progress=False)
+
+
+def test_every_scene_runs_with_the_default_task() -> None:
+    from gausspp import scenes
+
+    for name in scenes.names():  # contact and bounded-actuator scenes get DOP853 and the QP by default
+        res = sweep(name, [{"t_end": 0.01}], executor="serial", progress=False)
+        assert res.ok, (name, res.errors)
+        assert res.column("t_final")[0] == pytest.approx(0.01), name
+        if name in scenes.names("equality"):  # a saturated actuator may leave its constraint, by design
+            assert res.column("residual")[0] < 1e-6, name
+
+
+def test_bad_first_argument_and_params_are_named() -> None:
+    with pytest.raises(UnknownNameError, match="neither a task function nor a scene.*pendulum"):
+        sweep("pendulim", grid(i=[1]), executor="serial")
+    with pytest.raises(InputError, match="task function"):
+        sweep(42, grid(i=[1]), executor="serial")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match="list of parameter dicts.*wrap a single point"):
+        sweep(failing_task, {"i": 1}, executor="serial")  # type: ignore[arg-type]
+    with pytest.raises(InputError, match=r"params\[1\] must be a dict"):
+        sweep(failing_task, [{"i": 1}, 2], executor="serial")  # type: ignore[list-item]
+    with pytest.raises(InputError, match="grid axis t_end=0.5 must be a list"):
+        grid(t_end=0.5)  # type: ignore[arg-type]
+    with pytest.raises(SweepError, match="cannot be sent to worker processes.*top-level function"):
+        with ProcessPoolExecutor(1) as pool:
+            sweep(lambda p: {"y": 1.0}, grid(i=[1]), executor=pool)
+    with pytest.raises(SweepError, match="Parquet"):
+        sweep(failing_task, grid(i=[1]), executor="serial", out="x.parquet")
+    res = sweep(failing_task, grid(i=[1]), executor="serial", progress=False)
+    with pytest.raises(SweepError, match="no task's result has 'z'"):
+        res.column("z")
+
+
+# -- NPZ ---------------------------------------------------------------------------------------------------
+def test_npz_columns_and_round_trip(tmp_path: Path) -> None:
+    out = tmp_path / "sweep.npz"
+    params = grid(i=range(5), tag=["a"])
+    res = sweep(mixed_task, params, executor="serial", out=out, progress=False)
+    assert out.exists() and (tmp_path / "sweep.jsonl").exists()  # the log beside it: resumable
+    with np.load(out, allow_pickle=False) as data:
+        assert data["index"].tolist() == [0, 1, 2, 3, 4]
+        assert data["ok"].tolist() == [True, True, True, False, True]
+        assert data["error"][3].startswith("RuntimeError: no result at i=3") and data["error"][0] == ""
+        assert data["params.i"].dtype == np.int64 and data["params.i"].tolist() == [0, 1, 2, 3, 4]
+        assert data["params.tag"].tolist() == ["a"] * 5
+        y = data["results.y"]
+        assert y.dtype == float and np.isnan(y[3]) and y[4] == 4 / 3.0  # bitwise: the float went through JSON
+        assert data["results.vec"].shape == (5, 2) and np.isnan(data["results.vec"][3]).all()
+        assert data["results.vec"][2].tolist() == [2.0, 4.0]
+        assert data["results.label"].tolist() == ["p0", "p1", "p2", "", "p4"]
+        assert np.isnan(data["results.flag"][3]) and data["results.flag"][2] == 1.0
+    back = SweepResult.from_npz(out)
+    assert (back.params, back.results, back.errors, back.computed) == (res.params, res.results, res.errors, 5)
+    # a resume computes nothing and writes the same columns again
+    again = sweep(mixed_task, params, executor="serial", out=out, progress=False)
+    assert again.computed == 0 and SweepResult.from_npz(out).results == res.results
+    assert res.column("vec").shape == (5, 2) and res.param("i").tolist() == [0, 1, 2, 3, 4]
+    with pytest.raises(SweepError, match="not a number"):
+        res.column("label")
+    np.savez(tmp_path / "other.npz", x=np.zeros(2))
+    with pytest.raises(SweepError, match="not a sweep"):
+        SweepResult.from_npz(tmp_path / "other.npz")
+    with pytest.raises(SweepError, match="cannot read"):
+        SweepResult.from_npz(tmp_path / "missing.npz")
+
+
+# -- the work-precision study as a sweep ------------------------------------------------------------------
+def test_work_precision_sweep_gives_the_report_rows() -> None:
+    from dataclasses import asdict
+
+    from gausspp import report, sweeps
+
+    config = (["two-masses", "mixed-rate"], ["rk4", "rk4-compiled", "DOP853"], ["direct", "casadi:qrqp"])
+    expected = report.work_precision(*config, repeats=1)
+    with ProcessPoolExecutor(2) as pool:
+        rows, res = sweeps.work_precision(*config, repeats=1, executor=pool, progress=False)
+    assert res.ok and res.computed == len(res) == len(expected) + 2  # + one reference task per scene
+    assert [r["task"] for r in res.params[:2]] == ["reference", "reference"]
+
+    def same(row: report.Row) -> dict[str, Any]:
+        d = asdict(row)
+        del d["wall_time"]  # measured, not computed
+        return d
+
+    assert [same(r) for r in rows] == [same(r) for r in expected]  # bitwise, through JSON and workers
+    assert any(r.reference.startswith("rk4-compiled") for r in rows)  # mixed-rate: the computed reference
+    with pytest.raises(UnknownNameError, match="solver 'nope'"):
+        sweeps.work_precision(["two-masses"], ["rk4"], ["nope"])
+
+
+def test_cli_sweep_work_precision_writes_the_report_and_resumes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from gausspp.cli import main
+
+    argv = ["sweep", "work-precision", "--scenes", "two-masses", "--methods", "rk4", "DOP853", "--solvers"]
+    argv += ["direct", "--repeats", "1", "--workers", "1", "--out", str(tmp_path), "--quiet"]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "6 runs; computed 7 of 7 tasks" in text and "two-masses" in text and "rtol=1e-13" in text
+    for name in ("work_precision.jsonl", "work_precision.csv", "work_precision.json"):
+        assert (tmp_path / name).stat().st_size > 0
+    records = json.loads((tmp_path / "work_precision.json").read_text())
+    assert [r["method"] for r in records] == ["rk4"] * 2 + ["DOP853"] * 4 and all(
+        r["status"] == "success" for r in records
+    )
+    assert len(_records(tmp_path / "work_precision.jsonl")) == 7
+    assert main(argv) == 0  # resumed: nothing computed again, the same table
+    assert "computed 0 of 7 tasks" in capsys.readouterr().out
+    assert json.loads((tmp_path / "work_precision.json").read_text()) == records
+    assert main(["sweep", "work-precision", "--resolution", "3"]) == 2
+    assert main(["sweep", "realizability", "--scenes", "pendulum"]) == 2
+    assert main(["sweep", "work-precision", "--solvers", "nope", "--out", str(tmp_path)]) == 2
+    assert "--solvers: 'nope' is unknown" in capsys.readouterr().err
+
+
+def test_readme_sweeps_snippet_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import re
+
+    section = (ROOT / "README.md").read_text().split("## Sweeps", 1)[1].split("\n## ", 1)[0]
+    code = re.search(r"```python\n(.*?)```", section, re.S)
+    assert code is not None
+    monkeypatch.chdir(tmp_path)
+    namespace: dict[str, Any] = {}
+    exec(compile(code.group(1), "README.md", "exec"), namespace)
+    assert namespace["res"].ok and len(namespace["res"]) == 72 * 35
+    assert len(_records(tmp_path / "margins.jsonl")) == 72 * 35
+    swings = SweepResult.from_npz(tmp_path / "swings.npz")
+    assert swings.ok and (tmp_path / "swings.jsonl").exists()
+    # the pin pulls hardest at the bottom of the swing: m g + m L ω_b², ω_b² = 2 m g L (sin φ0 + 1)/(Ic + m L²)
+    bottom = 9.81 + 2 * 9.81 * (np.sin([0.0, 0.5, 1.0]) + 1) / 1.01
+    assert np.allclose(swings.column("max_reaction"), bottom, rtol=1e-5)
