@@ -252,3 +252,17 @@ def test_inequality_qp_is_the_least_compulsion_among_active_sets(seed: int, n: i
         assert np.max(np.abs(sol.u - best[2])) <= 1e-7 * floor * (1 + np.max(np.abs(best[2]))), (backend, cond_H)
         assert np.all(sol.u >= -1e-12) and np.all(sol.residual >= -1e-9 * scale)
         assert abs(sol.u @ sol.residual) <= 1e-8 * floor * scale * (1 + np.max(np.abs(sol.u)))  # complementarity
+
+
+def test_a_point_mass_dropped_on_a_floor_bounces_and_rests_as_the_closed_form_says() -> None:
+    """The issue's case itself: a point mass (not a block) from h = 1 with e = 0.5."""
+    body = gp.Lagrangian(n=1, T=lambda q, v, t: 0.5 * 2.0 * v[0] ** 2, V=lambda q, t: 2.0 * G * q[0])
+    model = gp.Model(body, [gp.Unilateral(lambda q, t: q[0], name="floor", restitution=0.5)])
+    traj = gp.simulate(model, [1.0], [0.0], 2.0, rtol=1e-12, atol=1e-14, dt=0.05)
+    times = _impact_times(traj)
+    assert np.max(np.abs(times[:10] - bounce_times(1.0, 0.5, G, 10))) <= 1e-9
+    apex = [traj.q[(traj.t > times[k]) & (traj.t < times[k + 1]), 0].max() for k in range(10)]
+    assert np.max(np.abs(np.array(apex) - 0.25 ** np.arange(1, 11))) <= 1e-9
+    at_rest = traj.t > times[-1] + 1e-3
+    assert at_rest.sum() >= 3 and np.max(np.abs(traj.contact_force[at_rest, 0] - 2.0 * G)) <= 1e-12 * 2.0 * G
+    assert traj.q[:, 0].min() >= -1e-12
