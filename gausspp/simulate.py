@@ -475,6 +475,12 @@ def _record(
     touch = _margin_touches_zero(ts, margin, model.margin_error) if record_failure is None and checked else None
     if touch is not None:  # a minimum of the margin between samples reaches zero: the step went past it
         i, t_min = touch
+        warnings.warn(
+            f"the realizability margin falls below {model.margin_warn:g} between the samples at t={ts[i - 1]:.6g} and "
+            f"t={ts[i + 1]:.6g} (smallest sampled {margin[i]:.3g}; its parabola reaches zero near t={t_min:.6g})",
+            RealizabilityWarning,
+            stacklevel=3,
+        )
         record_failure = RealizabilityError(
             f"the realizability margin reaches zero between t={ts[i - 1]:.6g} and t={ts[i + 1]:.6g} (near "
             f"t={t_min:.6g}; constraints {', '.join(repr(n) for n in model.names)}): the realization cannot keep the "

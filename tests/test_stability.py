@@ -435,13 +435,9 @@ def test_crane_vertical_verdict(cases: dict[str, Case]) -> None:
     assert cases["crane near the vertical rope"].verdict, cases["crane near the vertical rope"].observed
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="library problem: fixed-step RK4 now stops at the vertical rope with a RealizabilityError, but no "
-    "RealizabilityWarning precedes it (the sampled margin stays above 1e-6 until the step past t*)",
-)
 def test_crane_fixed_step_rk4_warns_and_stops_at_the_vertical_rope() -> None:
+    """The sampled margin stays above 1e-6 until the step past t*; the dip of its parabola between samples
+    both warns (the margin falls below margin_warn there) and stops the run."""
     s = gp.scenes.get("crane", M0=1.0, m=0.5, L=1.0, theta0=-0.3, accel=0.0, distance=0.0, t_end=0.2)
     t_star = math.sqrt(2 * (1 - math.cos(0.3)) / 9.81)
     with warnings.catch_warnings(record=True) as caught:
