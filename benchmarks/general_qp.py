@@ -24,20 +24,18 @@ prints the setting in force.
 from __future__ import annotations
 
 import argparse
-import gc
 import math
 import os
 import platform
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
-from itertools import repeat
 from time import perf_counter
 from typing import Any
 
 import casadi as ca
 import numpy as np
 import qpsolvers
+from _timing import best_us
 
 import gausspp as gp
 import gausspp.model as _model_module
@@ -57,26 +55,6 @@ class Row:
     qp: float = math.nan  # µs, solve_general alone
     disagreement: float = math.nan
     note: str = ""
-
-
-def _run(fn: Callable[[], object], n: int) -> float:
-    start = perf_counter()
-    for _ in repeat(None, n):
-        fn()
-    return perf_counter() - start
-
-
-def best_us(fn: Callable[[], object], budget: float, repeats: int) -> float:
-    """Minimum over ``repeats`` of the mean µs per call; ``n`` calls take ~``budget`` s."""
-    n = 1
-    while (elapsed := _run(fn, n)) < budget / 20:  # calibrate (and warm up)
-        n *= 2
-    n = max(1, round(n * budget / elapsed))
-    gc.disable()
-    try:
-        return min(_run(fn, n) for _ in range(repeats)) / n * 1e6
-    finally:
-        gc.enable()
 
 
 def captured_problem(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray) -> GaussProblem:

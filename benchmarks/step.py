@@ -17,19 +17,16 @@ time, so the minimum best estimates the code's own cost; the garbage collector i
 from __future__ import annotations
 
 import argparse
-import gc
 import math
 import os
 import platform
-from collections.abc import Callable
 from dataclasses import dataclass
-from itertools import repeat
-from time import perf_counter
 from typing import Any
 
 import casadi as ca
 import numpy as np
 import qpsolvers
+from _timing import best_us
 
 import gausspp.qp
 import gausspp.scenes
@@ -55,26 +52,6 @@ class Row:
     step: float = math.nan  # µs, model.step(...)
     disagreement: float = math.nan
     error: str = ""
-
-
-def _run(fn: Callable[[], object], n: int) -> float:
-    start = perf_counter()
-    for _ in repeat(None, n):
-        fn()
-    return perf_counter() - start
-
-
-def best_us(fn: Callable[[], object], budget: float, repeats: int) -> float:
-    """Minimum over ``repeats`` of the mean µs per call; ``n`` calls take ~``budget`` s."""
-    n = 1
-    while (elapsed := _run(fn, n)) < budget / 20:  # calibrate (and warm up)
-        n *= 2
-    n = max(1, round(n * budget / elapsed))
-    gc.disable()
-    try:
-        return min(_run(fn, n) for _ in range(repeats)) / n * 1e6
-    finally:
-        gc.enable()
 
 
 def measure(

@@ -413,6 +413,21 @@ def _demo_general() -> None:
     )
 
 
+def _print_study(rows: list[Any]) -> None:
+    """The work-precision table and the fastest run per scene reaching 1e-10."""
+    from . import report as study
+
+    print(study.table(rows))
+    print("\nFastest run reaching a final-state error ≤ 1e-10, per scene:")
+    for scene, row in study.best_per_scene(rows).items():
+        shown = (
+            "none"
+            if row is None
+            else f"{row.method} · {row.solver} · {row.setting}: {row.final_error:.1e} in {row.wall_time:.4f} s"
+        )
+        print(f"  {scene:20s} {shown}")
+
+
 def report(args: argparse.Namespace) -> int:
     """Work-precision study (or, with --stability, the stability study): table, CSV/JSON, plots."""
     from pathlib import Path
@@ -436,15 +451,7 @@ def report(args: argparse.Namespace) -> int:
         repeats=args.repeats,
         progress=(lambda m: print(f"  … {m}", file=sys.stderr)) if args.verbose else None,
     )
-    print(study.table(rows))
-    print("\nFastest run reaching a final-state error ≤ 1e-10, per scene:")
-    for scene, row in study.best_per_scene(rows).items():
-        shown = (
-            "none"
-            if row is None
-            else f"{row.method} · {row.solver} · {row.setting}: {row.final_error:.1e} in {row.wall_time:.4f} s"
-        )
-        print(f"  {scene:20s} {shown}")
+    _print_study(rows)
     files = study.write(rows, out)
     try:
         from . import plot
@@ -830,15 +837,7 @@ def _sweep_work_precision(args: argparse.Namespace, executor: Any) -> int:
         out=log,
         progress=not args.quiet,
     )
-    print(study.table(rows))
-    print("\nFastest run reaching a final-state error ≤ 1e-10, per scene:")
-    for scene, row in study.best_per_scene(rows).items():
-        shown = (
-            "none"
-            if row is None
-            else f"{row.method} · {row.solver} · {row.setting}: {row.final_error:.1e} in {row.wall_time:.4f} s"
-        )
-        print(f"  {scene:20s} {shown}")
+    _print_study(rows)
     files = [log, *study.write(rows, out)]
     try:
         from . import plot
