@@ -482,7 +482,9 @@ def _simulate(
         solver = "direct" if meth.name == "cvodes" else "qp"
     elif meth.name == "cvodes" and solver != "direct":
         raise UsageError("--method cvodes needs --solver direct (CVODES differentiates the right-hand side)")
-    stabilize = getattr(args, "stabilize", "none")
+    stabilize = getattr(args, "stabilize", None)
+    if stabilize is None:  # the scene's own drift control (a bounded servo's feedback), else none
+        stabilize = scene.params.get("stabilize", "none")
     dt: float | None = args.dt
     record: Any = 1
     if meth.adaptive:
@@ -1024,7 +1026,10 @@ def _parser() -> argparse.ArgumentParser:
         help=f"QP backend for --solver qp (default: {qp.DEFAULT}); e.g. casadi:osqp, qpsolvers:daqp",
     )
     r.add_argument(
-        "--stabilize", choices=("none", "project", "baumgarte"), default="none", help="drift control (default: none)"
+        "--stabilize",
+        choices=("none", "project", "baumgarte"),
+        default=None,
+        help="drift control (default: the scene's own, e.g. the saturated crane's feedback; else none)",
     )
     r.add_argument("--out", metavar="DIR", help="write the trajectory to DIR (NPZ, CSV and, with matplotlib, PNG)")
     r.set_defaults(func=run)
