@@ -14,6 +14,9 @@ integrator's root finder on its dense output:
   the energy balance still closes;
 * an active contact's force reaches zero from above → the contact lets go (lift-off).
 
+Active contacts are kept like any holonomic constraint, to the integration tolerance: a body
+rolling on a contact drifts into it by about ``rtol`` (2e-11 at ``rtol = 1e-10`` for a turning block).
+
 **Rest.** A ball with ``0 < e < 1`` bounces infinitely often in finite time (Zeno). When a
 contact would leave the impact slower than ``rest_speed`` the impact is taken as plastic
 (``e = 0``) and the contact rests from then on. Each impact is recorded twice (before and
@@ -93,6 +96,13 @@ def _active_set(
     force = model.general_step(t, q, v, lam, backend=backend, closed=candidates)[0].contact_force
     threshold = 1e-10 * max(1.0, float(np.max(np.abs(force), initial=0.0)))
     return tuple(i for i in candidates if force[i] > threshold)
+
+
+def _off_the_start(value: float, t: float, t_start: float) -> float:
+    """An event function's value, made positive at the phase's start: a phase begins *on* the boundaries it
+    watches (g = 0 after a touch, ġ = 0 after a release), and the root finder would otherwise return the
+    start itself as the event — no progress, the same event again (chattering at one instant)."""
+    return max(value, 1e-300) if t == t_start else value
 
 
 def simulate_contacts(
@@ -175,6 +185,7 @@ def simulate_contacts(
     evaluations = steps = 0
     closed: set[int] = {int(i) for i in np.flatnonzero(g <= model.contact_tol)}
     departing: set[int] = set()  # at g ≈ 0 and separating: watched on ġ until they turn round
+    jumps: list[float] = []  # times of the velocity jumps (numbered from 1 in the events)
     sample_phase: list[int] = [0]
 
     def impact(t_e: float, y_e: np.ndarray) -> np.ndarray:
@@ -191,12 +202,15 @@ def simulate_contacts(
         y_new[nq : nq + nv] = res.v_after
         y_new[nq + nv : nq + nv + nl] = res.lam_after
         y_new[-2] += res.kinetic_energy_after - res.kinetic_energy_before  # the impulse's work
+        jumps.append(t_e)  # one velocity jump may close several contacts at once: they share its number
+        jump = len(jumps)
         for i in res.closed:
-            if gd[i] < 0:
+            if gd[i] < -model.contact_tol:  # an approaching contact (a resting one only takes part)
                 events.append(
                     {
                         "t": t_e,
                         "kind": "impact",
+                        "jump": jump,
                         "contact": model.contact_row_names[i],
                         "speed_before": float(gd[i]),
                         "speed_after": float(after[i]),
@@ -217,8 +231,11 @@ def simulate_contacts(
         while t < t_end:
             qc, vc, lc = y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl]
             active = _active_set(model, t, qc, vc, lc, gb, closed)
+            released = closed - set(active)  # closed but pushing nothing: it separates (g̈ > 0) — watch it leave
+            closed -= released
             gdot_start = _gaps(model, t, qc, vc)[1]
-            departing = {i for i in departing if gdot_start[i] > 0}  # those that turned round watch their gap
+            # departing contacts that turned round (ġ ≤ 0, e.g. at the same instant as another's apex) watch g
+            departing = {i for i in departing if gdot_start[i] > 0} | released
             sub = _phase_model(model, active)
             sub_solver = "direct" if sub.k == 0 else solver
             rhs = RightHandSide(sub, sub_solver, qb if sub_solver == "qp" else None, stab)
@@ -230,15 +247,18 @@ def simulate_contacts(
             for i in inactive:
                 which = 1 if i in departing or i in closed else 0
 
-                def closes(t_: float, y_: np.ndarray, i: int = i, which: int = which) -> float:
-                    return float(_gaps(model, t_, y_[:nq], y_[nq : nq + nv])[which][i])
+                def closes(t_: float, y_: np.ndarray, i: int = i, which: int = which, t0_: float = t) -> float:
+                    value = float(_gaps(model, t_, y_[:nq], y_[nq : nq + nv])[which][i])
+                    return _off_the_start(value, t_, t0_)
 
                 closes.terminal, closes.direction = True, -1  # type: ignore[attr-defined]
                 event_fns.append(closes)
             for pos, _i in enumerate(active):
 
-                def lets_go(t_: float, y_: np.ndarray, col: int = m + pos, rhs: RightHandSide = rhs) -> float:
-                    return float(rhs.evaluate(t_, y_)["u"][col])
+                def lets_go(
+                    t_: float, y_: np.ndarray, col: int = m + pos, rhs: RightHandSide = rhs, t0_: float = t
+                ) -> float:
+                    return _off_the_start(float(rhs.evaluate(t_, y_)["u"][col]), t_, t0_)
 
                 lets_go.terminal, lets_go.direction = True, -1  # type: ignore[attr-defined]
                 event_fns.append(lets_go)
@@ -279,10 +299,9 @@ def simulate_contacts(
                 g_now, gd_now = _gaps(model, t, y[:nq], y[nq : nq + nv])
                 closed.add(i)
                 closed.update(
-                    int(c)
-                    for c in np.flatnonzero((g_now <= model.contact_tol) & (gd_now <= model.contact_tol))
-                    if c not in departing
+                    int(c) for c in np.flatnonzero((g_now <= model.contact_tol) & (gd_now <= model.contact_tol))
                 )
+                departing -= closed
                 gd = _gaps(model, t, y[:nq], y[nq : nq + nv])[1][i]
                 if gd < -model.contact_tol:
                     y = impact(t, y)
@@ -299,7 +318,7 @@ def simulate_contacts(
             if len(events) > max_events:
                 raise IntegrationError(
                     f"more than {max_events} contact events by t={t:.6g} (Zeno-like chattering): raise rest_speed so "
-                    "that slow impacts end in rest, or max_events"
+                    "that slow impacts end in rest, or max_events (both arguments of gp.simulate)"
                 )
     except GaussppError as exc:
         failure = exc

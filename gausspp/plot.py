@@ -9,6 +9,7 @@ Figures
 -------
 trajectory          ``q(t)``, ``v(t)`` and optionally the phase portrait ``(qᵢ, vᵢ)``
 reaction_over_time  ``u(t)`` (``λ`` or ``λ̇``), compulsion ``Z(t)`` and the realizability margin
+contacts            gaps ``g(t)``, contact forces and energy of a run with unilateral contacts
 realizability_map   the margin of a servo torque along ``n`` over the sphere of directions ``n``
 three_realizations  one constraint ``(ω, l) = 0`` kept ideally, by a servo torque, by a flywheel
 skate               the nonholonomic and the vakonomic skate in the plane
@@ -31,6 +32,7 @@ from .scenes._rigid import inertia_matrix, unit_vector
 
 if TYPE_CHECKING:
     from .integral import Verification
+    from .model import Model
     from .report import Row
     from .trajectory import Trajectory
 
@@ -212,6 +214,135 @@ def reaction_over_time(traj: Trajectory | Mapping[str, Trajectory], *, title: st
         _legend(ax)
     if title:
         fig.suptitle(title)
+    return fig
+
+
+# -- contacts ----------------------------------------------------------------------------------------
+def contacts(model: Model, traj: Trajectory, *, title: str | None = None) -> Any:
+    """Gaps, contact forces and energy of a run with unilateral contacts (``gp.Unilateral``).
+
+    Three panels sharing the time axis:
+
+    1. every contact row's gap ``g(t)`` (linear scale; the floor ``g = 0`` dotted), with the
+       contact events marked on it at ``g = 0`` in the row's colour: impacts ``▼``, plastic
+       impacts ``■`` (``e = 0``: slower than ``rest_speed``, the last impact of a Zeno sequence
+       that ends in rest, or a resting contact that takes part in another contact's impact),
+       lift-offs ``▲``, touches without impact ``○``;
+    2. the contact forces ``traj.contact_force`` (``≥ 0``; zero in flight — the impulses of the
+       impacts are not drawn);
+    3. the total energy ``E(t)`` and, as a step line, the kinetic energy lost at impacts, summed
+       over the velocity jumps (simultaneous impacts of several rows are one jump, counted once);
+       their sum ``E + lost`` (dotted) is constant when nothing else does work.
+
+    The markers of panel 1 are ``Line2D`` artists with ``gid`` ``"impact"``,
+    ``"plastic impact"``, ``"lift-off"`` or ``"touch"``: one per row and kind, one point per event.
+
+    Parameters
+    ----------
+    model : Model
+        The model that was simulated (it knows the gaps and the rows' names).
+    traj : Trajectory
+        Its run by :func:`gausspp.simulate` (event by event).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three axes: gaps, forces, energy.
+    """
+    from .contact import _gaps
+
+    names = [str(s) for s in getattr(model, "contact_row_names", [])]
+    if not names:
+        raise InputError(
+            "the model has no unilateral contacts (gp.Unilateral): no gaps or contact forces to draw; "
+            "use plot.trajectory or plot.reaction_over_time"
+        )
+    N, n = int(np.size(traj.t)), len(names)
+    if N == 0:
+        raise InputError("the trajectory has no samples")
+    for attr, want in {"t": (N,), "q": (N, model.nq), "v": (N, model.nv), "contact_force": (N, n)}.items():
+        got = tuple(np.shape(getattr(traj, attr)))
+        if got != want:
+            raise ShapeError(
+                f"traj.{attr} has shape {got}, expected {want} ({N} samples, contact rows {names}): "
+                "is this a run of this model?"
+            )
+    unknown = sorted({str(ev.get("contact")) for ev in traj.events if ev.get("contact") not in names})
+    if unknown:
+        raise InputError(f"traj.events name contacts {unknown} that the model does not have ({names})")
+    plt = _pyplot()
+    from matplotlib.lines import Line2D
+
+    t = np.asarray(traj.t, float)
+    gaps = np.array([_gaps(model, t[k], traj.q[k], traj.v[k])[0] for k in range(N)]).reshape(N, n)
+    fig, (gap_ax, force_ax, energy_ax) = plt.subplots(3, 1, figsize=(8.0, 8.0), sharex=True, layout="constrained")
+    colors = plt.get_cmap("tab10")
+    for i, name in enumerate(names):
+        gap_ax.plot(t, gaps[:, i], color=colors(i % 10), lw=1.2, label=f"gap of {name}")
+        force_ax.plot(t, traj.contact_force[:, i], color=colors(i % 10), lw=1.2, label=f"force on {name}")
+    gap_ax.axhline(0.0, color="k", ls=":", lw=0.8)
+
+    kinds = {  # gid: marker, filled, legend text
+        "impact": ("v", True, "impact"),
+        "plastic impact": ("s", True, "plastic impact (e = 0: ends in rest)"),
+        "lift-off": ("^", True, "lift-off"),
+        "touch": ("o", False, "touch (no impact)"),
+    }
+
+    def kind(ev: Mapping[str, Any]) -> str:
+        return "plastic impact" if ev.get("kind") == "impact" and ev.get("plastic") else str(ev.get("kind"))
+
+    handles = gap_ax.get_legend_handles_labels()[0]
+    for gid, (marker, filled, text) in kinds.items():
+        for i, name in enumerate(names):
+            times = [float(ev["t"]) for ev in traj.events if ev.get("contact") == name and kind(ev) == gid]
+            if times:
+                c = colors(i % 10)
+                mfc = c if filled else "none"
+                style = dict(marker=marker, ls="none", ms=6, mec="k", mew=0.6, mfc=mfc, color=c)
+                gap_ax.plot(times, np.zeros(len(times)), gid=gid, zorder=3, **style)
+        if any(kind(ev) == gid for ev in traj.events):
+            handles.append(
+                Line2D([], [], marker=marker, ls="none", mec="k", mfc="0.6" if filled else "none", label=text)
+            )
+    gap_ax.legend(handles=handles, fontsize=8, loc="upper right")
+    gap_ax.set(ylabel="gap g", title="gaps g(t) of the contacts (g ≥ 0; events marked at g = 0)")
+    force_ax.set(ylabel="contact force", title="contact forces (multipliers ≥ 0; zero in flight)")
+
+    # the energy the velocity jumps took: the events of one jump share t and the kinetic energies
+    jumps: dict[tuple[float, float, float], float] = {}
+    for ev in traj.events:
+        if ev.get("kind") == "impact":
+            before, after = float(ev["kinetic_energy_before"]), float(ev["kinetic_energy_after"])
+            jumps[(float(ev["t"]), before, after)] = before - after
+    energy = np.asarray(traj.energy, float)
+    if energy.shape == (N,) and np.all(np.isfinite(energy)):
+        energy_ax.plot(t, energy, color="k", lw=1.2, label="total energy E")
+        lost_by_sample = np.zeros(N)
+        repeated = np.flatnonzero(np.diff(t) == 0.0) + 1  # a sample after a jump shares the time of the one before
+        start = 0
+        for (tj, _before, _after), loss in jumps.items():
+            after_jump = repeated[(repeated >= start) & (t[repeated] == tj)]
+            start = int(after_jump[0]) if after_jump.size else int(np.searchsorted(t, tj, side="right"))
+            lost_by_sample[start:] += loss
+            start += 1
+        energy_ax.plot(t, energy + lost_by_sample, color="0.45", ls=":", lw=1.2, label="E + lost at impacts")
+    losses = list(jumps.values())
+    energy_ax.step(
+        [t[0], *(key[0] for key in jumps), t[-1]],
+        [0.0, *np.cumsum(losses), float(np.sum(losses))],
+        where="post",
+        color="tab:red",
+        lw=1.2,
+        label=f"kinetic energy lost at impacts ({len(jumps)} jumps)",
+    )
+    energy_ax.set(xlabel="time t", ylabel="energy", title="energy, and the kinetic energy lost at impacts")
+    for ax in (gap_ax, force_ax, energy_ax):
+        ax.grid(True, alpha=0.3)
+    _legend(force_ax)
+    _legend(energy_ax)
+    fig.suptitle((title or "Unilateral contacts") + _suffix("", traj))
     return fig
 
 

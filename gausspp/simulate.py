@@ -53,6 +53,8 @@ def simulate(
     record: int | Any = 1,
     constraint_tol: float = 1e-8,
     throw: bool = True,
+    rest_speed: float = 1e-6,
+    max_events: int = 10_000,
 ) -> Trajectory:
     """Integrate ``model`` from ``(q0, v0)`` at ``t0`` to ``t_end``.
 
@@ -83,6 +85,9 @@ def simulate(
     throw : bool
         Raise on failure (the exception's ``.trajectory`` holds what was computed), or return
         the partial trajectory with ``status="failed"``.
+    rest_speed, max_events :
+        Unilateral contacts only (:mod:`gausspp.contact`): an impact that would leave a contact
+        slower than ``rest_speed`` ends in rest; a run with more than ``max_events`` events stops.
 
     Returns
     -------
@@ -130,6 +135,8 @@ def simulate(
             constraint_tol=constraint_tol,
             throw=throw,
             record=record,
+            rest_speed=rest_speed,
+            max_events=max_events,
         )
     stab = as_stabilization(stabilize, dt)
     q, v, lam = _initial_state(model, t0, q0, v0, lam0)

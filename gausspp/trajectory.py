@@ -51,7 +51,10 @@ class Trajectory:
         Reaction unknowns at a bound.
     events : tuple of dict
         Impacts and contact changes, in order (``{"t", "kind", "contact", ...}``); two samples
-        share the time of an impact: before and after the velocity jump.
+        share the time of an impact: before and after the velocity jump. An impact names the
+        contact row that approached (``speed_before`` → ``speed_after``, its ``impulse``) and the
+        velocity ``jump`` it belongs to: rows hit at the same instant share one jump and so its
+        ``kinetic_energy_before``/``_after`` (count a jump's energy loss once).
     """
 
     t: np.ndarray

@@ -7,9 +7,11 @@ n ⟂ l for a non-principal l" is checked on the numbers behind the map.
 from __future__ import annotations
 
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import casadi as ca
 import numpy as np
 import pytest
 
@@ -256,3 +258,81 @@ def test_work_precision(tmp_path: Path) -> None:
     assert len(ax.get_lines()) == 4 and ax.get_xscale() == "log" and "1 failed" in ax.get_title()
     saved(fig, tmp_path / "wp.png")
     assert [p.name for p in plot.save_work_precision(rows, tmp_path / "out")] == ["work_precision_demo.png"]
+
+
+# -- contacts ------------------------------------------------------------------------------------------------
+def markers(ax: Any, *gids: str) -> int:
+    """Events marked on the gap panel: points of the marker lines with these gids."""
+    return sum(len(line.get_xdata()) for line in ax.get_lines() if line.get_gid() in gids)
+
+
+@pytest.fixture(scope="module")
+def rocking_block() -> tuple[gp.scenes.Scene, gp.Trajectory]:
+    scene = gp.scenes.get("block-on-floor", tilt=0.3, e=0.5, drop=0.3, t_end=1.0)
+    traj = gp.simulate(
+        scene.model, scene.q0, scene.v0, 1.0, method="DOP853", rtol=1e-11, atol=1e-13, record=np.linspace(0, 1, 201)
+    )
+    return scene, traj
+
+
+def test_contacts_rocking_block(rocking_block: tuple[gp.scenes.Scene, gp.Trajectory], tmp_path: Path) -> None:
+    scene, traj = rocking_block
+    names = scene.model.contact_row_names
+    impacts = [ev for ev in traj.events if ev["kind"] == "impact"]
+    plastic = [ev for ev in impacts if ev["plastic"]]
+    assert len(impacts) > 20 and 0 < len(plastic) < len(impacts)  # rocks, then each corner comes to rest
+    fig = plot.contacts(scene.model, traj, title="block")
+    assert len(fig.axes) == 3
+    gap_ax, force_ax, energy_ax = fig.axes
+    assert labelled(gap_ax) == [f"gap of {n}" for n in names]
+    # one force line per contact row, holding traj.contact_force
+    assert labelled(force_ax) == [f"force on {n}" for n in names] and len(force_ax.get_lines()) == len(names)
+    for i, line in enumerate(force_ax.get_lines()):
+        np.testing.assert_array_equal(line.get_ydata(), traj.contact_force[:, i])
+    # one marker per impact event, plastic ones apart, all on the floor g = 0
+    assert markers(gap_ax, "impact", "plastic impact") == len(impacts)
+    assert markers(gap_ax, "plastic impact") == len(plastic)
+    assert markers(gap_ax, "lift-off", "touch") == 0
+    assert all(np.all(line.get_ydata() == 0) for line in gap_ax.get_lines() if line.get_gid())
+    # the gaps: the lower corner starts `drop` above the floor, both end on it
+    lower = gap_ax.get_lines()[names.index("corner-")].get_ydata()
+    assert lower[0] == pytest.approx(0.3) and np.all(np.asarray(lower) >= -1e-9)
+    # energy: E, E + lost (constant: the resting forces do no work) and the lost energy (= −work of the reaction)
+    energy, total, lost = energy_ax.get_lines()
+    np.testing.assert_array_equal(energy.get_ydata(), traj.energy)
+    assert np.ptp(total.get_ydata()) < 1e-9
+    assert lost.get_ydata()[-1] == pytest.approx(traj.work_reaction[0] - traj.work_reaction[-1], rel=1e-9)
+    assert lost.get_ydata()[-1] == pytest.approx(traj.energy[0] - traj.energy[-1], rel=1e-9)
+    assert fig.get_suptitle() == "block"
+    saved(fig, tmp_path / "contacts.png")
+
+
+def test_contacts_lift_off_marked() -> None:
+    """A ball on the floor pulled up by a growing force lets go (lift-off), flies and lands again."""
+    ball = gp.Lagrangian(
+        n=2,
+        T=lambda q, v, t: 0.5 * (v[0] ** 2 + v[1] ** 2),
+        V=lambda q, t: 9.81 * q[1],
+        F=lambda q, v, t: ca.vertcat(0.0, 20.0 * ca.sin(np.pi * t)),
+    )
+    model = gp.Model(ball, [gp.Unilateral(lambda q, t: q[1], name="floor", restitution=0.5)])
+    traj = gp.simulate(model, [0.0, 0.0], [0.0, 0.0], 2.0, rtol=1e-10, atol=1e-12, record=np.linspace(0, 2, 101))
+    kinds = [ev["kind"] for ev in traj.events]
+    assert kinds[0] == "lift-off" and "impact" in kinds
+    gap_ax, force_ax, _ = plot.contacts(model, traj).axes
+    assert markers(gap_ax, "lift-off") == kinds.count("lift-off")
+    assert markers(gap_ax, "impact", "plastic impact") == kinds.count("impact")
+    assert len(force_ax.get_lines()) == 1 and force_ax.get_lines()[0].get_ydata()[0] == pytest.approx(9.81)
+
+
+def test_contacts_bad_input(two_masses: dict[str, Any], rocking_block: tuple[gp.scenes.Scene, gp.Trajectory]) -> None:
+    with pytest.raises(gp.InputError, match="no unilateral contacts"):
+        plot.contacts(two_masses["rod"].model, two_masses["rod_path"])
+    scene, traj = rocking_block
+    with pytest.raises(gp.InputError, match=r"traj.contact_force has shape \(\d+, 1\), expected"):
+        plot.contacts(scene.model, replace(traj, contact_force=traj.contact_force[:, :1]))
+    ball = gp.Model(
+        gp.Lagrangian(n=2, T=lambda q, v, t: 0.5 * (v[0] ** 2 + v[1] ** 2)), [gp.Unilateral(lambda q, t: q[1])]
+    )
+    with pytest.raises(gp.InputError, match="traj.q has shape"):
+        plot.contacts(ball, traj)  # the block's run is not the ball's

@@ -1,10 +1,12 @@
 """A block dropped on a floor: impacts with restitution, then resting contact (issue 7).
 
 A planar rigid block (width ``w``, height ``h``, mass ``m``, central moment of inertia
-``m(w² + h²)/12``) with coordinates ``q = (x, z, θ)`` under gravity ``g``; its two bottom corners
-``(±w/2, −h/2)`` (body axes) must stay above the floor:
+``m(w² + h²)/12``) with coordinates ``q = (x, z, θ)`` under gravity ``g``; its corners
+``(±w/2, ∓h/2)`` (body axes) must stay above the floor:
 
-    ``corner±: z ± (w/2) sin θ − (h/2) cos θ ≥ 0``     (Unilateral, restitution ``e``).
+    ``corner±: z ± (w/2) sin θ − (h/2) cos θ ≥ 0``,  ``top±: z ± (w/2) sin θ + (h/2) cos θ ≥ 0``
+
+(Unilateral, restitution ``e``; the top corners matter only for a block that tips over).
 
 Dropped flat (``tilt = 0``) from height ``z0 − h/2`` with zero vertical speed, both corners hit
 together and the block bounces like a point mass. Closed form: impact speeds ``v_k = eᵏ v₁``
@@ -61,11 +63,14 @@ def build(
         T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2) + 0.5 * inertia * v[2] ** 2,
         V=lambda q, t: m * g * q[1],
     )
+    # all four corners: a block that tips over lands on its top ones (the bottom two carry it otherwise)
     corners = [
         Unilateral(
-            lambda q, t, s=s: q[1] + s * 0.5 * w * ca.sin(q[2]) - 0.5 * h * ca.cos(q[2]), name=name, restitution=e
+            lambda q, t, s=s, u=u: q[1] + s * 0.5 * w * ca.sin(q[2]) + u * 0.5 * h * ca.cos(q[2]),
+            name=name,
+            restitution=e,
         )
-        for s, name in ((1.0, "corner+"), (-1.0, "corner-"))
+        for s, u, name in ((1.0, -1.0, "corner+"), (-1.0, -1.0, "corner-"), (1.0, 1.0, "top+"), (-1.0, 1.0, "top-"))
     ]
     model = Model(body, corners)
     # the lower corner starts `drop` above the floor
@@ -100,7 +105,7 @@ def build(
         lam0=None,
         t_end=t_end,
         exact=exact,
-        description="planar block dropped on a floor: two unilateral corner contacts, impacts with restitution e, "
+        description="planar block dropped on a floor: four unilateral corner contacts, impacts with restitution e, "
         "then rest",
         params=dict(m=m, w=w, h=h, g=g, e=e, drop=drop, tilt=tilt, vx=vx, t_end=t_end),
     )
