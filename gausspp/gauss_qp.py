@@ -16,9 +16,10 @@ Complementarity of contact forces comes from the QP's KKT conditions: a contact 
 while it would otherwise be violated. The problem is solved lexicographically, each stage a
 convex QP, so every answer is exact (no penalty weight to tune):
 
-1. **track** (only with bounded servo rows): minimize the tracking error
-   ``Σᵢ (Jᵢ a − φᵢ)² / (Jᵢ A⁻¹ Jᵢᵀ)`` over those rows — for one row, exactly the compulsion an
-   ideal constraint would need to correct the acceleration. Physically: a saturated actuator
+1. **track** (only when bounded servo rows cannot be kept): minimize the tracking error
+   ``Σᵢ (Jᵢ a − φᵢ)² / (Jᵢ A⁻¹ Jᵢᵀ)`` over those rows (plus a 1e-12 Tikhonov term on the
+   unit-sized unknowns, so that over-actuated rows give every backend a definite Hessian) —
+   for one row, exactly the compulsion an ideal constraint would need to correct the acceleration. Physically: a saturated actuator
    pushes at its bound in the direction that keeps the constraint best. The optimal error
    ``e*`` is unique; it is zero exactly when the bounds allow the constraint to be kept, and
    then the motion is the unbounded one.
@@ -64,6 +65,8 @@ RANK_TOL = 1e-9
 CONSISTENCY_TOL = 1e-8
 #: Relative violation of a stage's constraints above which the backend is deemed to have failed.
 FEASIBILITY_TOL = 1e-7
+#: Tikhonov weight in the track stage (the problem is unit-sized): the tracking error is minimal to about this.
+TRACK_REGULARIZATION = 1e-12
 #: A point the backend itself calls inaccurate is accepted only if it is optimal to this (the problems are unit-sized).
 INACCURATE_KKT_TOL = 1e-10
 #: Backends that print to the C-level stdout (silenced around their calls; that costs tens of µs).
@@ -402,7 +405,10 @@ def solve_general(
         u = compulsion(Ek, ek, True)
         if u is None:  # saturated: the least tracking error first, then the least compulsion
             stages.append("track")
-            u1 = _solve_stage(_Stage(St.T @ St, -St.T @ rt, E, e, G, h, lo, hi, "track"), solver, where)
+            # ‖S ũ − r‖² is only semidefinite when there are more actuators than rows; a Tikhonov term of
+            # TRACK_REGULARIZATION (on the unit-sized problem) makes it definite for every backend
+            P = St.T @ St + TRACK_REGULARIZATION * np.eye(m)
+            u1 = _solve_stage(_Stage(P, -St.T @ rt, E, e, G, h, lo, hi, "track"), solver, where)
             assert u1 is not None
             # at the onset of saturation the error may be round-off small: the actuator is at its bound either way
             tracking_error = float(np.linalg.norm(St @ u1 - rt))

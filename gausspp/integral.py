@@ -196,6 +196,7 @@ def discretize(
     out = fn.map(tn.size)(tn[None, :], qn.T, vn.T, an.T)
     R, A, E1, E0, Phi, g = (np.array(x) for x in out)
     n, k = model.nv, model.k
+    r = fn.pointwise.size  # type: ignore[attr-defined]  # rows of the relations (20): k unless a realization has more
     Phi, g = Phi.reshape(k, -1), g.reshape(k, -1)
     worst = float(max(np.abs(Phi).max(), np.abs(g).max()))
     if worst > constraint_tol:
@@ -210,8 +211,8 @@ def discretize(
         t=tn,
         R=R.reshape(n, -1).T,
         G=G,
-        E1=E1.reshape(k, -1, n).transpose(1, 0, 2),
-        E0=E0.reshape(k, -1, n).transpose(1, 0, 2),
+        E1=E1.reshape(r, -1, n).transpose(1, 0, 2),
+        E0=E0.reshape(r, -1, n).transpose(1, 0, 2),
         pointwise=fn.pointwise,  # type: ignore[attr-defined]
     )
 
@@ -365,6 +366,11 @@ def verify(
     acceleration : {"path", "recorded"}
         ``ẍ`` from the path's velocities (quintic spline; the honest check) or the trajectory's
         recorded accelerations (measured data).
+
+    An over-actuated :class:`~gausspp.Force` enters with the relations of its least-compulsion
+    reaction, ``S H⁻¹ M δx = 0``, so a path with another allocation is not a motion. Actuator
+    bounds and unilateral contacts are not part of (23) here: verify a contact motion phase by
+    phase, and a bounded servo while it does not saturate.
     """
     if method not in ("qp", "closed-form"):
         raise InputError(f"method={method!r} is unknown; use 'qp' or 'closed-form'")

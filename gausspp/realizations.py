@@ -199,7 +199,14 @@ class Force(Realization):
         return Reaction(D=M.T, r0=ca.SX.zeros(mech.nv))
 
     def virtual_displacements(self, mech: Mechanism, c: ConstraintExpressions, a: ca.SX) -> VirtualDisplacements:
-        return VirtualDisplacements(E1=None, E0=self._M(mech, c))
+        M = self._M(mech, c)
+        if M.size1() == c.J.shape[0]:
+            return VirtualDisplacements(E1=None, E0=M)
+        # over-actuated: the least-compulsion reaction is R = Mᵀ H⁻¹ Sᵀ y (H = M A⁻¹ Mᵀ, S = J A⁻¹ Mᵀ), so
+        # the motion is characterized by the k relations S H⁻¹ M δx = 0 (for m = k they are M δx = 0)
+        AinvMt = ca.solve(mech.A, M.T)
+        S = c.J @ AinvMt
+        return VirtualDisplacements(E1=None, E0=S @ ca.solve(M @ AinvMt, M))
 
     def __repr__(self) -> str:
         return "Force()" if self._bounds is None else f"Force(bounds={self._bounds!r})"

@@ -157,3 +157,18 @@ def test_over_actuated_step_is_the_least_compulsion_allocation(backend: str) -> 
     assert res.u == pytest.approx([9.81 - np.sin(1.0), 0.0], abs=1e-9)
     with pytest.raises(gp.InputError, match="solver='qp'"):
         model.step(1.0, [0.0, np.sin(1.0)], [0.0, np.cos(1.0)], solver="direct")
+
+
+def test_verify_tells_the_least_compulsion_allocation_from_another_one() -> None:
+    """(23) for an over-actuated servo uses the k relations S H⁻¹ M δx = 0 of the least-compulsion reaction:
+    the drone's own motion passes; a motion where a capped rotor forces another allocation does not."""
+    free = gp.scenes.get("two-actuator-servo")
+    capped = gp.scenes.get("two-actuator-servo", f_max=(5.5, 100.0))  # the lever rule asks rotor 1 for ≈ 5.9
+    record = np.linspace(0.0, 0.4, 401)
+    own = gp.simulate(free.model, free.q0, free.v0, 0.4, method="DOP853", rtol=1e-12, atol=1e-14, record=record)
+    other = gp.simulate(capped.model, capped.q0, capped.v0, 0.4, method="DOP853", rtol=1e-12, atol=1e-14, record=record)
+    assert other.saturated[:, 0].any() and other.tracking_error.max() == 0.0  # reallocated, constraint kept
+    assert other.max_residual() <= 1e-12
+    assert gp.verify(free.model, own).is_motion
+    check = gp.verify(free.model, other)
+    assert not check.is_motion and check.relative_gap > 5 * check.tolerance
