@@ -19,10 +19,10 @@ convex QP, so every answer is exact (no penalty weight to tune):
 1. **track** (only when bounded servo rows cannot be kept): minimize the tracking error
    ``Σᵢ (Jᵢ a − φᵢ)² / (Jᵢ A⁻¹ Jᵢᵀ)`` over those rows (plus a 1e-12 Tikhonov term on the
    unit-sized unknowns, so that over-actuated rows give every backend a definite Hessian) —
-   for one row, exactly the compulsion an ideal constraint would need to correct the acceleration. Physically: a saturated actuator
-   pushes at its bound in the direction that keeps the constraint best. The optimal error
-   ``e*`` is unique; it is zero exactly when the bounds allow the constraint to be kept, and
-   then the motion is the unbounded one.
+   for one row, exactly the compulsion an ideal constraint would need to correct the acceleration.
+   Physically: a saturated actuator pushes at its bound in the direction that keeps the
+   constraint best. The optimal error ``e*`` is unique; it is zero exactly when the bounds
+   allow the constraint to be kept, and then the motion is the unbounded one.
 2. **compulsion**: minimize ``Z`` with the tracked rows fixed at ``J_s a = φ_s + e*``.
    The acceleration is unique (``Z`` is strictly convex in ``a``).
 3. **least norm** (only when ``W`` has dependent columns, e.g. redundant constraint rows):
