@@ -18,6 +18,9 @@ from .model import Model
 class RightHandSide:
     """``F(t, y)`` for a model, a step solver and a stabilization; counts its evaluations."""
 
+    #: Whether the realizability margin of its steps means something (see :class:`GeneralRightHandSide`).
+    margin_checked = True
+
     def __init__(self, model: Model, solver: str, backend: str | None, stab: Stabilization) -> None:
         self.model = model
         self.kernel = model.kernel(solver, backend)
@@ -83,7 +86,7 @@ class GeneralRightHandSide:
 
     kernel = None
 
-    def __init__(self, model: Model, backend: str | None, stab: Stabilization) -> None:
+    def __init__(self, model: Model, backend: str | None, stab: Stabilization, *, margin_checked: bool = True) -> None:
         from .gauss_qp import check_backend
 
         self.model = model
@@ -95,7 +98,7 @@ class GeneralRightHandSide:
         self._slices = (slice(0, m.nq), slice(m.nq, m.nq + m.nv), slice(m.nq + m.nv, m.nq + m.nv + m.n_lam))
         self._lam_cols = np.array(model.lam_columns, dtype=int)
         #: Whether the realizability margin says anything (not for redundant rows, where it is 0 by design).
-        self.margin_checked = not getattr(model, "_redundant", False)
+        self.margin_checked = margin_checked
 
     def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
         """Evaluate the step at ``(t, y)``; raise a project error if it fails."""
@@ -108,7 +111,7 @@ class GeneralRightHandSide:
                 "reduce dt or use a stiff method"
             )
         m = self.model
-        res, sol, extras = m._general(
+        res, _, extras = m._general(
             float(t),
             y[sq],
             y[sv],
@@ -117,18 +120,12 @@ class GeneralRightHandSide:
             self.stab if stabilized else np.zeros(2),
             consistency_tol=DRIFT_CONSISTENCY_TOL,
         )
-        A, J, D = extras.pop("A"), extras.pop("J"), extras.pop("D")
-        Jt = np.linalg.solve(np.linalg.cholesky(A), J.T).T
-        W = np.linalg.solve(np.linalg.cholesky(A), D)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            S_norm = (Jt @ W) / np.outer(np.linalg.norm(Jt, axis=1), np.linalg.norm(W, axis=0))
         return {
             "a": res.a,
             "u": res.u,
             "reaction": res.reaction,
             "compulsion": np.array([res.compulsion]),
             "Phi": res.constraint_value,
-            "S_norm": np.nan_to_num(S_norm),
             "tracking_error": np.array([res.tracking_error]),
             "saturated": np.asarray(res.saturated, bool),
             **extras,

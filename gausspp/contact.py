@@ -153,16 +153,9 @@ def simulate_contacts(
     t_end = float(t_end)
     if not (np.isfinite(t_end) and t_end > t):
         raise InputError(f"need finite t0 < t_end, got t0={t}, t_end={t_end}")
-    data = model._general_data(t, q, v, lam, np.zeros(2))
-    g_bi, Phi_bi = data[7].ravel(), data[6].ravel()
-    for values, what in ((g_bi, "g(q, t)"), (Phi_bi, "Φ(q, v, t)")):
-        bad = np.flatnonzero(~(np.abs(values) <= constraint_tol))
-        if bad.size:
-            i = int(bad[0])
-            raise InitialDataError(
-                f"initial data are off the constraint {model.row_names[i]!r} at t={t:.6g}: {what} = {values[i]:.3g} "
-                f"(tolerance {constraint_tol:g}); correct q0/v0"
-            )
+    from .simulate import _check_on_constraint
+
+    _check_on_constraint(model, t, q, v, lam, constraint_tol, hint="correct q0/v0")
     g, gdot = _gaps(model, t, q, v)
     if np.any(g < -model.contact_tol):
         i = int(np.argmin(g))

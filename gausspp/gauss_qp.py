@@ -169,6 +169,7 @@ class GaussSolution:
     tracking_error : float  ``(Σᵢ (Jᵢ a − φᵢ)² / (Jᵢ A⁻¹ Jᵢᵀ))^½`` over tracked rows (0 unless saturated)
     at_bound : (m,) bool  reaction components at one of their bounds (finite bounds only)
     stages : list of str  which stages ran (``track``, ``compulsion``, ``least-norm``)
+    S_norm : (k, m)       ``J A⁻¹ D`` with rows and columns normalized in ``A⁻¹`` (the realizability cosines)
     redundant_rows : int  how many equality rows were dependent on the others
     """
 
@@ -180,6 +181,7 @@ class GaussSolution:
     at_bound: np.ndarray
     stages: list[str] = field(default_factory=list)
     redundant_rows: int = 0
+    S_norm: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
 
 def _at(t: float) -> str:
@@ -419,8 +421,8 @@ def solve_general(
         stages.append("compulsion")
         u = compulsion(E, e)
         assert u is not None
-    _, _, VtW, rank_W = _svd_rank(W)
-    if rank_W < m:  # the acceleration fixes W u only: pick the least-norm reaction among those
+    if rank_Ws < m:  # the acceleration fixes W u only: pick the least-norm reaction among those
+        _, _, VtW, rank_W = _svd_rank(W)  # (the unscaled unknowns: their norm is the one to minimize)
         stages.append("least-norm")
         rows, rhs = VtW[:rank_W], VtW[:rank_W] @ (u / cs)  # W u = W u*, in the original unknowns
         if bounded:
@@ -449,4 +451,5 @@ def solve_general(
         at_bound=at_bound,
         stages=stages,
         redundant_rows=redundant,
+        S_norm=S,
     )

@@ -110,7 +110,7 @@ class Model:
         self._assemble()
         self._assemble_contacts()
         #: True if some realization has bounds on its reaction (bounded servo, :class:`~gausspp.Force`).
-        self.bounded = any(c.realization.bounds is not None for c in self.constraints)
+        self.bounded = any(b is not None for b in self._group_bounds)
         self._general_fn: _Bound | None = None
         self._kernels: dict[tuple[str, str | None], Kernel] = {}
         self._data_fn: ca.Function | None = None
@@ -123,6 +123,7 @@ class Model:
         self.n_lam = sum(k for k, c in zip(sizes, self.constraints, strict=True) if c.realization.has_state)
         self.lam = ca.SX.sym("lam", self.n_lam)
         Ds, r0, groups, lam0_parts, row_names, lam_cols = [], ca.SX.zeros(mech.nv), [], [], [], []
+        group_bounds: list[tuple[np.ndarray, np.ndarray] | None] = []
         row = col = lam_at = 0
         for c, e, k, name in zip(self.constraints, exprs, sizes, self.names, strict=True):
             real = c.realization
@@ -138,6 +139,7 @@ class Model:
                     f"constraint {name!r}: reaction directions D have shape {D.shape}, expected ({mech.nv}, m)"
                 )
             Ds.append(D)
+            group_bounds.append(real.bounds_for(D.size2()))
             r0 = r0 + reaction.r0
             groups.append(Group(name, slice(row, row + k), slice(col, col + D.size2()), real.hint, real.label))
             row_names += [name] if k == 1 else [f"{name}[{i}]" for i in range(k)]
@@ -146,6 +148,7 @@ class Model:
         self.row_names = row_names
         self.lam_columns = lam_cols
         self._groups = groups
+        self._group_bounds = group_bounds  # per constraint: bounds on its reaction unknowns, or None
         known = [p for p in lam0_parts if p is not None]
         self._lam0: np.ndarray | None = None if len(known) < len(lam0_parts) else np.concatenate([np.zeros(0), *known])
         Phi = ca.vertcat(ca.SX(0, 1), *[e.Phi for e in exprs])
@@ -373,12 +376,6 @@ class Model:
         bound.eval()
         return [r.reshape(bound.fn.size_out(i), order="F").copy() for i, r in enumerate(bound.res)]
 
-    def closed_contacts(self, t: float, q: Any, v: Any, lam: Any = None) -> np.ndarray:
-        """Indices of the contact rows that are closed at the state (``|g| ≤ contact_tol``)."""
-        t, q, v, lam = self._state(t, q, v, lam)
-        gc = self._general_data(t, q, v, lam, _NO_STAB)[11].ravel()
-        return np.flatnonzero(gc <= self.contact_tol)
-
     def general_step(
         self,
         t: float,
@@ -418,7 +415,7 @@ class Model:
         """:meth:`general_step` on checked inputs; also returns kinematics, energy, powers and ``g``."""
         A, f, r0, J, phi, D, Phi, g, qdot, energy, power, gc, Jc, phic, gdotc = self._general_data(t, q, v, lam, stab)
         f, r0, phi, Phi, gc, phic, gdotc = (x.ravel() for x in (f, r0, phi, Phi, gc, phic, gdotc))
-        closed = np.flatnonzero(gc <= self.contact_tol) if closed is None else np.asarray(closed, dtype=int)
+        closed = self._closed(gc, closed)
         approaching = closed[gdotc[closed] < -self.contact_tol]
         if approaching.size:
             i = int(approaching[0])
@@ -432,35 +429,16 @@ class Model:
             a0 = np.linalg.solve(A, f + r0)
         except np.linalg.LinAlgError:
             a0 = np.zeros(self.nv)  # the QP's Cholesky reports the singular A
-        m, nc = self.m, closed.size
-        lower, upper = np.full(m + nc, -np.inf), np.full(m + nc, np.inf)
-        lower[m:] = 0.0
-        kind = ["eq"] * self.k + ["ge"] * nc
-        for c, grp in zip(self.constraints, self._groups, strict=True):
-            if c.realization.bounds is not None:
-                lower[grp.cols], upper[grp.cols] = c.realization.bounds
-                for i in range(grp.rows.start, grp.rows.stop):
-                    kind[i] = "track"
-        problem = GaussProblem(
-            A=A,
-            a0=a0,
-            D=np.hstack([D.reshape(self.nv, m), Jc[closed].T.reshape(self.nv, nc)]),
-            J=np.vstack([J.reshape(self.k, self.nv), Jc[closed].reshape(nc, self.nv)]),
-            phi=np.concatenate([phi, phic[closed]]),
-            kind=kind,
-            lower=lower,
-            upper=upper,
-            rows=[*self.row_names, *(self.contact_row_names[i] for i in closed)],
-            t=t,
-        )
+        m = self.m
+        problem = self._gauss_problem(t, A, a0, J, phi, D, Jc, phic[closed], closed)
         sol = solve_general(problem, backend, consistency_tol)
-        u, mu = sol.u[:m], sol.u[m:]
+        u = sol.u[:m]
         contact_force = np.zeros(len(self.contact_row_names))
-        contact_force[closed] = mu
+        contact_force[closed] = sol.u[m:]
         D2, J2 = D.reshape(self.nv, m), J.reshape(self.k, self.nv)
         cos = cosines(A, J2, D2) if self.k else np.zeros(0)
         margin = (float(cos.min()) if m >= self.k and cos.size else 0.0) if self.k else 1.0
-        reaction = r0 + D2 @ u + Jc[closed].T.reshape(self.nv, nc) @ mu
+        reaction = r0 + problem.D @ sol.u  # the realizations' reactions and the contact forces
         result = StepResult(
             t=t,
             a=sol.a,
@@ -483,9 +461,7 @@ class Model:
             "power_forces": power.ravel(),
             "power_reaction": np.array([float(v @ reaction)]),
             "g": g.ravel(),
-            "A": A,
-            "J": J.reshape(self.k, self.nv),
-            "D": D.reshape(self.nv, m),
+            "S_norm": sol.S_norm[: self.k, :m],
         }
         return result, sol, extras
 
@@ -497,6 +473,45 @@ class Model:
             self._data_fn = ca.Function("step_data", self._inputs, [p.A, p.f, p.r0, p.J, p.phi, p.D, p.Phi])
         A, f, r0, J, phi, D, Phi = (np.array(x) for x in self._data_fn(t, q, v, lam, _NO_STAB))
         return StepProblem(A=A, f=f.ravel(), r0=r0.ravel(), J=J, phi=phi.ravel(), D=D, Phi=Phi.ravel())
+
+    def _closed(self, gc: np.ndarray, closed: Any) -> np.ndarray:
+        """Contact rows taken as closed: those given, else those within ``contact_tol`` of zero."""
+        return np.flatnonzero(gc <= self.contact_tol) if closed is None else np.asarray(closed, dtype=int)
+
+    def _gauss_problem(
+        self,
+        t: float,
+        A: np.ndarray,
+        a0: np.ndarray,
+        J: np.ndarray,
+        phi: np.ndarray,
+        D: np.ndarray,
+        Jc: np.ndarray,
+        phi_c: np.ndarray,
+        closed: np.ndarray,
+    ) -> GaussProblem:
+        """The bilateral rows (bounded ones tracked) and the closed contacts (``≥``, force ``≥ 0``) as one QP."""
+        m, nc, nv = self.m, closed.size, self.nv
+        Jcc = Jc[closed].reshape(nc, nv)
+        lower, upper = np.full(m + nc, -np.inf), np.full(m + nc, np.inf)
+        lower[m:] = 0.0
+        kind = ["eq"] * self.k + ["ge"] * nc
+        for grp, bounds in zip(self._groups, self._group_bounds, strict=True):
+            if bounds is not None:
+                lower[grp.cols], upper[grp.cols] = bounds
+                kind[grp.rows] = ["track"] * (grp.rows.stop - grp.rows.start)
+        return GaussProblem(
+            A=A,
+            a0=a0,
+            D=np.hstack([D.reshape(nv, m), Jcc.T]),
+            J=np.vstack([J.reshape(self.k, nv), Jcc]),
+            phi=np.concatenate([phi.ravel(), phi_c]),
+            kind=kind,
+            lower=lower,
+            upper=upper,
+            rows=[*self.row_names, *(self.contact_row_names[i] for i in closed)],
+            t=t,
+        )
 
     def impact(
         self,
@@ -524,25 +539,15 @@ class Model:
             )
         A, _f, _r0, J, _phi, D, Phi, *_, gc, Jc, _phic, gdotc = self._general_data(t, q, v, lam, _NO_STAB)
         Phi, gc, gdotc = Phi.ravel(), gc.ravel(), gdotc.ravel()
-        closed = np.flatnonzero(gc <= self.contact_tol) if closed is None else np.asarray(closed, dtype=int)
+        closed = self._closed(gc, closed)
         e = self.restitution[closed].copy()
         e[np.isin(closed, np.asarray(plastic, dtype=int))] = 0.0
-        m, nc, nv = self.m, closed.size, self.nv
-        Jcc = Jc[closed].reshape(nc, nv)
+        m, nv = self.m, self.nv
+        Jcc = Jc[closed].reshape(closed.size, nv)
         target = -e * np.minimum(gdotc[closed], 0.0)  # ġ⁺ ≥ target
-        lower = np.concatenate([np.full(m, -np.inf), np.zeros(nc)])
-        problem = GaussProblem(
-            A=A,
-            a0=v,
-            D=np.hstack([D.reshape(nv, m), Jcc.T]),
-            J=np.vstack([J.reshape(self.k, nv), Jcc]),
-            phi=np.concatenate([J.reshape(self.k, nv) @ v - Phi, Jcc @ v - gdotc[closed] + target]),
-            kind=["eq"] * self.k + ["ge"] * nc,
-            lower=lower,
-            upper=np.full(m + nc, np.inf),
-            rows=[*self.row_names, *(self.contact_row_names[i] for i in closed)],
-            t=t,
-        )
+        # the same problem one level down: v⁻ plays a₀, impulses play forces, the rows act on v⁺
+        phi = J.reshape(self.k, nv) @ v - Phi
+        problem = self._gauss_problem(t, A, v, J, phi, D, Jc, Jcc @ v - gdotc[closed] + target, closed)
         sol = solve_general(problem, backend)
         impulse = np.zeros(len(self.contact_row_names))
         impulse[closed] = sol.u[m:]

@@ -83,7 +83,7 @@ class Realization(ABC):
     has_state: bool = False
     label: str = "realization"
     lam0: np.ndarray | None = None
-    #: Bounds ``(lo, hi)`` on the reaction unknowns ``u`` (``None``: unbounded; see :class:`Force`).
+    #: Bounds ``(lo, hi)`` on the reaction unknowns ``u``, as given (``None``: unbounded; see :class:`Force`).
     bounds: tuple[np.ndarray, np.ndarray] | None = None
     #: What to change when the realization cannot keep the constraint (used in messages).
     hint: str = "choose reaction directions D with J A⁻¹ D nonsingular"
@@ -91,6 +91,10 @@ class Realization(ABC):
     @abstractmethod
     def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
         """The reaction's directions ``D`` and known part ``r₀`` for one constraint."""
+
+    def bounds_for(self, m: int) -> tuple[np.ndarray, np.ndarray] | None:
+        """:attr:`bounds` for ``m`` reaction unknowns (one pair of arrays of length ``m``), or ``None``."""
+        return None if self.bounds is None else _bounds(self.bounds, m)
 
     @abstractmethod
     def virtual_displacements(self, mech: Mechanism, c: ConstraintExpressions, a: ca.SX) -> VirtualDisplacements:
@@ -171,7 +175,6 @@ class Force(Realization):
 
     def __init__(self, M: Callable[..., Any], bounds: Any = None) -> None:
         self.M = M
-        self._bounds = bounds
         if bounds is not None:
             if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
                 raise InputError(f"Force: bounds must be a pair (lo, hi), got {bounds!r}")
@@ -180,6 +183,7 @@ class Force(Realization):
                 raise NonFiniteError(f"Force: bounds contain NaN: {bounds!r}")
             if lo.ndim != 1 or hi.ndim != 1:
                 raise ShapeError(f"Force: bounds must be scalars or vectors, got shapes {lo.shape}, {hi.shape}")
+            self.bounds = (lo, hi)
             self.label = "force (bounded)"
 
     def _M(self, mech: Mechanism, c: ConstraintExpressions) -> ca.SX:
@@ -193,10 +197,7 @@ class Force(Realization):
         return M
 
     def reaction(self, mech: Mechanism, c: ConstraintExpressions, lam: ca.SX) -> Reaction:
-        M = self._M(mech, c)
-        if self._bounds is not None:
-            self.bounds = _bounds(self._bounds, M.size1())
-        return Reaction(D=M.T, r0=ca.SX.zeros(mech.nv))
+        return Reaction(D=self._M(mech, c).T, r0=ca.SX.zeros(mech.nv))
 
     def virtual_displacements(self, mech: Mechanism, c: ConstraintExpressions, a: ca.SX) -> VirtualDisplacements:
         M = self._M(mech, c)
@@ -209,7 +210,7 @@ class Force(Realization):
         return VirtualDisplacements(E1=None, E0=S @ ca.solve(M @ AinvMt, M))
 
     def __repr__(self) -> str:
-        return "Force()" if self._bounds is None else f"Force(bounds={self._bounds!r})"
+        return "Force()" if self.bounds is None else f"Force(bounds=({self.bounds[0]}, {self.bounds[1]}))"
 
 
 def _bounds(bounds: Any, m: int) -> tuple[np.ndarray, np.ndarray]:

@@ -144,7 +144,8 @@ def simulate(
         q, v = _project_initial(model, t0, q, v, lam, constraint_tol)
     _check_on_constraint(model, t0, q, v, lam, constraint_tol)
 
-    general = model.bounded or _redundant_at(model, solver, backend, t0, q, v, lam)
+    redundant = _redundant_rows(model, solver, backend, t0, q, v, lam)
+    general = model.bounded or redundant
     rhs: AnyRightHandSide
     if general:
         if solver == "direct":
@@ -156,8 +157,7 @@ def simulate(
                 f"method {meth.name!r} runs the compiled step, which a model with bounded actuators or redundant "
                 "constraint rows does not have: use a Python or scipy method (rk4, RK45, DOP853, Radau, ...)"
             )
-        rhs = GeneralRightHandSide(model, backend, stab)
-        rhs.margin_checked = not _rows_redundant(model, t0, q, v, lam)
+        rhs = GeneralRightHandSide(model, backend, stab, margin_checked=not redundant)
     else:
         rhs = RightHandSide(model, solver, backend, stab)
     y0 = np.concatenate([q, v, lam, [0.0, 0.0]])
@@ -197,24 +197,17 @@ def simulate(
 
 
 # -- set-up ----------------------------------------------------------------------------------
-def _rows_redundant(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> bool:
-    """Whether the bilateral constraint rows are dependent at the state (the general QP's rank test)."""
-    if model.k == 0:
-        return False
-    try:
-        return model.general_step(t, q, v, lam)[1].redundant_rows > 0
-    except GaussppError:
-        return False
-
-
-def _redundant_at(
+def _redundant_rows(
     model: Model, solver: str, backend: str | None, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray
 ) -> bool:
-    """Redundant rows on the QP route: the run uses the general QP, which returns the least-norm multiplier."""
-    if solver != "qp" or model.bounded:
-        return False
+    """Whether the bilateral rows are dependent at the start, so that the run needs the general QP (which
+    returns the least-norm multiplier) and the realizability margin, 0 by design, says nothing."""
     try:
-        with warnings.catch_warnings():
+        if model.bounded:  # the general QP's own rank test
+            return model.k > 0 and model.general_step(t, q, v, lam)[1].redundant_rows > 0
+        if solver != "qp":
+            return False
+        with warnings.catch_warnings():  # the compiled QP hands exactly redundant rows to the general QP
             warnings.simplefilter("ignore", RealizabilityWarning)
             return model.step(t, q, v, lam, solver=solver, backend=backend).solver.startswith("gauss-qp:")
     except GaussppError:
@@ -277,7 +270,15 @@ def _project_initial(
     )
 
 
-def _check_on_constraint(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, tol: float) -> None:
+#: What to do about initial data off the constraint (contact runs cannot project: they say only the first part).
+PROJECT_HINT = (
+    "correct q0/v0, or pass stabilize='project' to project them onto the constraint along the realization's directions"
+)
+
+
+def _check_on_constraint(
+    model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, tol: float, hint: str = PROJECT_HINT
+) -> None:
     g, Phi = _residuals(model, t, q, v, lam)
     for values, what in ((g, "g(q, t)"), (Phi, "Φ(q, v, t)")):
         bad = np.flatnonzero(~(np.abs(values) <= tol))  # NaN counts as off
@@ -285,8 +286,7 @@ def _check_on_constraint(model: Model, t: float, q: np.ndarray, v: np.ndarray, l
             worst = int(bad[np.argmax(np.nan_to_num(np.abs(values[bad]), nan=np.inf))])
             raise InitialDataError(
                 f"initial data are off the constraint {model.row_names[worst]!r} at t={t:.6g}: {what} = "
-                f"{values[worst]:.3g} (tolerance {tol:g}); correct q0/v0, or pass stabilize='project' to "
-                "project them onto the constraint along the realization's directions"
+                f"{values[worst]:.3g} (tolerance {tol:g}); {hint}"
             )
 
 
@@ -461,7 +461,7 @@ def _record(
     ts, ys = ts[:kept], ys[:kept]
     S = np.array(cols["S_norm"]).reshape(kept, model.k, model.m) if kept else np.zeros((0, model.k, model.m))
     margin = np.linalg.svd(S, compute_uv=False).min(axis=1) if kept and model.m >= model.k else np.zeros(kept)
-    checked = getattr(rhs, "margin_checked", True)
+    checked = rhs.margin_checked
     if (
         kept > 1 and model.m == model.k and checked
     ):  # det S is continuous along a motion: a sign change means S was singular
