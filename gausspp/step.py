@@ -107,9 +107,11 @@ def reduce(p: StepExpressions) -> Reduced:
     S_norm = S / (ca.sqrt(ca.sum2(Jt * Jt)) @ ca.sqrt(ca.sum1(W * W)))
     rhs_hat = ca.solve(RJ.T, p.phi - p.J @ a0)
     diagR = ca.diag(R)
-    # Relative smallest pivot: NaN or ≤ 0 when A is not positive definite
-    # (casadi's fmin ignores NaN, so NaN from a failed factorization is added back explicitly).
-    pivot = ca.mmin(diagR * diagR) / ca.mmax(ca.fabs(ca.diag(p.A))) + ca.sum1(diagR * 0)
+    # Relative smallest pivot: ≤ 0 when A is not positive definite. A failed factorization leaves NaN on
+    # the diagonal, which casadi's fmin would skip (and NaN·0 simplifies to 0 in SX): NaN > 0 is false,
+    # so each pivot that is not positive counts as −1.
+    squares = diagR * diagR
+    pivot = ca.mmin(ca.if_else(squares > 0, squares, -1)) / ca.mmax(ca.fabs(ca.diag(p.A)))
     if not ca.is_equal(p.A, p.A.T, 20):
         asym = ca.mmax(ca.fabs(p.A - p.A.T)) / ca.mmax(ca.fabs(p.A))
         pivot = ca.if_else(asym > 1e-12, -1.0, pivot)

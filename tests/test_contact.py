@@ -305,3 +305,15 @@ def test_a_closed_contact_that_separates_by_acceleration_does_not_chatter() -> N
     assert traj.success and len(traj.events) < 200 and traj.events[0]["t"] > 1e-3  # leaves, comes back later
     gaps = np.array([_gaps(model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
     assert gaps.min() >= -1e-12  # a corner resting while the block turns drifts by the tolerance (2e-11 at 1e-10)
+
+
+def test_a_mass_matrix_that_is_not_positive_definite_stops_a_contact_run_and_a_step() -> None:
+    """diag(1, −1): the compiled step's pivot check used to miss it (NaN from the failed factorization was
+    dropped by casadi's fmin, and NaN·0 simplified to 0), so the free flight ran on."""
+    body = gp.Lagrangian(n=2, T=lambda q, v, t: 0.5 * (v[0] ** 2 - v[1] ** 2), V=lambda q, t: G * q[1])
+    contact = gp.Model(body, [gp.Unilateral(lambda q, t: q[1], name="floor")])
+    traj = gp.simulate(contact, [0.0, 1.0], [0.0, 0.0], 1.0, throw=False)
+    assert traj.status == "failed" and "NotPositiveDefiniteError" in traj.message
+    rail = gp.Model(body, [gp.Constraint(lambda q, v, t: v[0], name="rail")])
+    with pytest.raises(gp.NotPositiveDefiniteError, match=r"eigenvalues \[-1\.\s+1\.\]"):
+        rail.step(0.0, [0.0, 1.0], [0.0, 0.0])
