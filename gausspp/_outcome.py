@@ -146,14 +146,7 @@ def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, m
         raise NonFiniteError(
             f"the step produced NaN or inf {_where(t)} although its data are finite; margin {margin:.3g}"
         )
-    if margin < margin_warn:
-        names = ", ".join(repr(g.name) for g in groups)
-        warnings.warn(
-            f"realizability margin {margin:.3g} {_where(t)} (constraints {names}) is small: the reaction is large "
-            "and sensitive to errors",
-            RealizabilityWarning,
-            stacklevel=3,
-        )
+    warn_small_margin(margin, t, groups, margin_warn, stacklevel=4)
     qp_res = None
     if solver != "direct":
         primal, dual = float(out["qp_primal"][0]), float(out["qp_dual"][0])
@@ -177,3 +170,15 @@ def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, m
         solver=solver,
         qp_residuals=qp_res,
     )
+
+
+def warn_small_margin(margin: float, t: float, groups: list[Group], margin_warn: float, stacklevel: int = 4) -> None:
+    """Warn (:class:`RealizabilityWarning`) when ``margin < margin_warn``: the reaction is large and sensitive."""
+    if margin < margin_warn:
+        names = ", ".join(repr(g.name) for g in groups)
+        warnings.warn(
+            f"realizability margin {margin:.3g} {_where(t)} (constraints {names}) is small: the reaction is large "
+            "and sensitive to errors",
+            RealizabilityWarning,
+            stacklevel=stacklevel,
+        )

@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import contextlib
 import warnings
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -58,6 +58,7 @@ from .errors import (
 )
 from .qp.casadi_conic import stdout_silenced
 from .qp.qpsolvers_route import OPTIONS
+from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL, independent_rows
 
 #: Singular values below this fraction of the largest count as zero (rows are normalized first).
 RANK_TOL = 1e-9
@@ -288,26 +289,23 @@ def _compress(S: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray, flo
     return rows, rhs, float(np.linalg.norm(outside)), rank
 
 
-def solve_general(
-    p: GaussProblem, backend: str | None = None, consistency_tol: float = CONSISTENCY_TOL
-) -> GaussSolution:
-    """Solve the general Gauss step (see the module docstring) with a qpsolvers ``backend``.
+@dataclass(frozen=True)
+class _Scaled:
+    """A problem in the unit-free form every stage works in (see :func:`solve_general`)."""
 
-    ``consistency_tol``: how far (relative) dependent equality rows may disagree before it is an
-    error; up to it they are solved in the least-squares sense. A simulation passes a looser value
-    than a single step: its states drift off the constraints by the integration error.
+    L: np.ndarray  # L Lᵀ = A
+    W: np.ndarray  # L⁻¹ D: Z(u) = ‖W u‖²
+    Jn: np.ndarray  # J L⁻ᵀ, rows of unit length
+    norms: np.ndarray  # the rows' lengths in A⁻¹
+    cs: np.ndarray  # column lengths of W (unknowns scaled to ũ = cs ⊙ u)
+    S: np.ndarray  # Jn (W / cs): J A⁻¹ D normalized by rows and columns
+    r: np.ndarray  # (φ − J a₀) / norms / unit
+    scale: float  # size of the right-hand side's terms, for the consistency test
+    unit: float  # the problem's size (the QP is solved at unit size)
 
-    Raises
-    ------
-    NotPositiveDefiniteError
-        ``A`` is not symmetric positive definite.
-    RealizabilityError
-        A realization cannot keep its constraint (``rank S < rank J`` on bilateral rows), or
-        dependent bilateral rows contradict each other.
-    QPSolveError
-        The backend found no solution (e.g. contacts and bounds that contradict each other).
-    """
-    solver = check_backend(backend)
+
+def _scaled(p: GaussProblem) -> _Scaled:
+    """Factor ``A``, normalize rows and columns and bring the problem to unit size; names bad data."""
     where = _at(p.t)
     try:
         L = np.linalg.cholesky(p.A)  # L Lᵀ = A
@@ -322,7 +320,7 @@ def solve_general(
     W = np.linalg.solve(L, p.D)  # L⁻¹ D
     Jt = np.linalg.solve(L, p.J.T).T  # J L⁻ᵀ
     norms = np.linalg.norm(Jt, axis=1)
-    names = list(p.rows) or [f"row {i}" for i in range(p.J.shape[0])]
+    names = _row_names(p)
     for i in np.flatnonzero(norms == 0):
         raise RealizabilityError(
             f"constraint row {names[i]!r} has a zero gradient{where}: it does not restrict the acceleration",
@@ -333,7 +331,8 @@ def solve_general(
     # unknowns scaled to unit columns of W (ũ = c ⊙ u): H has a unit diagonal, whatever the units of u
     cs = np.linalg.norm(W, axis=0)
     cs[cs == 0] = 1.0
-    S = (Jt @ W) / norms[:, None] / cs
+    Jn = Jt / norms[:, None]
+    S = (Jn @ W) / cs
     r = (p.phi - p.J @ p.a0) / norms
     scale = float(np.max(np.abs(p.phi / norms), initial=0.0) + np.max(np.abs(p.J @ p.a0 / norms), initial=0.0))
     # The problem is homogeneous in (r, bounds) → u: solve it at unit size, so that the backends'
@@ -341,11 +340,65 @@ def solve_general(
     finite_bounds = np.abs(np.concatenate([p.lower, p.upper]))
     finite_bounds = finite_bounds[np.isfinite(finite_bounds)]
     unit = float(np.max(np.abs(r), initial=0.0)) or float(np.max(finite_bounds, initial=0.0)) or 1.0
-    r, scale = r / unit, scale / unit
+    return _Scaled(L, W, Jn, norms, cs, S, r / unit, scale / unit, unit)
+
+
+def _row_names(p: GaussProblem) -> list[str]:
+    return list(p.rows) or [f"row {i}" for i in range(p.J.shape[0])]
+
+
+def _kept_rows(ref: _Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """The bilateral rows kept (:func:`gausspp.redundancy.independent_rows` at the reference) and how far
+    the dropped ones contradict the kept ones there (relative to the right-hand side's size), and each row's sine
+    against the rows kept before it."""
+    eq_rows = np.flatnonzero(eq)
+    kept_local, sines = independent_rows(ref.Jn[eq_rows])
+    kept = eq_rows[kept_local]
+    dropped = np.setdiff1d(eq_rows, kept)
+    gap = 0.0
+    if dropped.size:
+        if kept.size:  # each dropped row as a combination of the kept ones; its right-hand side must follow
+            combo = np.linalg.lstsq(ref.Jn[kept].T, ref.Jn[dropped].T, rcond=None)[0]
+            gap = float(np.max(np.abs(ref.r[dropped] - combo.T @ ref.r[kept])))
+        else:
+            gap = float(np.max(np.abs(ref.r[dropped])))
+    return kept, gap / max(ref.scale, 1e-300), sines
+
+
+def solve_general(
+    p: GaussProblem,
+    backend: str | None = None,
+    consistency_tol: float = CONSISTENCY_TOL,
+    reference: GaussProblem | Callable[[], GaussProblem | None] | None = None,
+) -> GaussSolution:
+    """Solve the general Gauss step (see the module docstring) with a qpsolvers ``backend``.
+
+    ``reference``: the same problem at the nearest state on the constraint manifold, or a function
+    that builds it (called only when the rows at ``p`` are nearly but not clearly dependent, or
+    disagree). Which bilateral rows are redundant, and whether they agree, is decided there
+    (:mod:`gausspp.redundancy`); ``p`` is then solved with the kept rows. ``consistency_tol``: how
+    far (relative) dependent rows may disagree at the reference before it is an error.
+
+    Raises
+    ------
+    NotPositiveDefiniteError
+        ``A`` is not symmetric positive definite.
+    RealizabilityError
+        A realization cannot keep its constraint (``rank S < rank J`` on bilateral rows), or
+        dependent bilateral rows contradict each other.
+    QPSolveError
+        The backend found no solution (e.g. contacts and bounds that contradict each other).
+    """
+    solver = check_backend(backend)
+    where = _at(p.t)
+    s = _scaled(p)
+    names = _row_names(p)
+    S, r, cs, unit = s.S, s.r, s.cs, s.unit
     kind = np.asarray(p.kind)
     eq, track, ge = kind == "eq", kind == "track", kind == "ge"
     m = p.D.shape[1]
-    H = (W / cs).T @ (W / cs)
+    Ws = s.W / cs
+    H = Ws.T @ Ws
     stages: list[str] = []
 
     def realizable(mask: np.ndarray) -> None:
@@ -353,9 +406,9 @@ def solve_general(
             return
         # compare S = J A⁻¹ D with the Gram matrix J A⁻¹ Jᵀ (the ideal realization's S): both square the
         # smallness of nearly dependent rows, so near-redundancy is not mistaken for a failing realization
-        Jn = Jt[mask] / norms[mask, None]
+        Jn = ref.Jn[mask]
         rank_J = _svd_rank(Jn @ Jn.T)[3]
-        rank_S = _svd_rank(S[mask])[3]
+        rank_S = _svd_rank(ref.S[mask])[3]
         if rank_S < rank_J:
             raise RealizabilityError(
                 f"the realization cannot keep the constraint(s) "
@@ -367,16 +420,24 @@ def solve_general(
                 margin=0.0,
             )
 
+    ref = s
+    kept, gap, sines = _kept_rows(ref, eq)
+    # rows that are independent here but not clearly so, or dependent rows that disagree, may be an artefact of
+    # the state's distance from the manifold: decide at the nearest state on it
+    ambiguous = bool(np.any((sines > DEPENDENCE_TOL) & (sines < CLEARLY_INDEPENDENT))) or gap > consistency_tol
+    if ambiguous and reference is not None:
+        on_manifold = reference() if callable(reference) else reference
+        if on_manifold is not None:
+            ref = _scaled(on_manifold)
+            kept, gap, sines = _kept_rows(ref, eq)
     realizable(eq | track)
-    E, e, gap, rank = _compress(S[eq], r[eq])
-    redundant = int(eq.sum()) - rank
-    if gap > consistency_tol * max(scale, 1e-300):
+    redundant = int(eq.sum()) - kept.size
+    if gap > consistency_tol:
         involved = sorted({names[i].split("[")[0] for i in np.flatnonzero(eq)})
         raise RealizabilityError(
             f"the constraint rows of {', '.join(map(repr, involved))} are dependent and contradict each other{where} "
-            f"(inconsistency {gap:.2e}): "
-            "the state is off the constraints (in a simulation: the drift has grown — reduce dt, tighten rtol or "
-            "stabilize), or the redundant rows describe different constraints",
+            f"(relative inconsistency {gap:.2e} on the constraint manifold): the redundant rows describe different "
+            "constraints — remove one of them",
             t=p.t,
             constraint=names[int(np.flatnonzero(eq)[0])],
             margin=0.0,
@@ -385,67 +446,81 @@ def solve_general(
     lo, hi = p.lower.astype(float) / unit * cs, p.upper.astype(float) / unit * cs
     tracking_error = 0.0
     bounded = bool(np.any(np.isfinite(lo)) or np.any(np.isfinite(hi)))
-    _, _, VtWs, rank_Ws = _svd_rank(W / cs)
+    rank_W = _svd_rank(ref.W / ref.cs)[3]  # dependent reaction columns, judged at the reference
 
-    def compulsion(E: np.ndarray, e: np.ndarray, infeasible_ok: bool = False) -> np.ndarray | None:
-        if rank_Ws == m or bounded:
-            return _solve_stage(_Stage(H, np.zeros(m), E, e, G, h, lo, hi, "compulsion"), solver, where, infeasible_ok)
-        # dependent reaction columns and no bounds: only the row space of W matters (Z and every
-        # constraint act through W u), and there the Hessian is positive definite for every backend
-        V = VtWs[:rank_Ws].T
-        Er, er, _gap, _rank = _compress(E @ V, e)
-        free = np.full(rank_Ws, np.inf)
-        st = _Stage(V.T @ H @ V, np.zeros(rank_Ws), Er, er, G @ V, h, -free, free, "compulsion")
+    scaled_u: list[np.ndarray] = []  # the last u-space stage's unknowns ũ (exact at the bounds)
+
+    def compulsion(rows: np.ndarray, rhs: np.ndarray, infeasible_ok: bool = False) -> np.ndarray | None:
+        """The whitened reaction ``w = W u`` of least ``‖w‖² = Z`` with ``rows · L⁻ᵀ w = rhs`` (rows of ``Jn``)."""
+        if rank_W == m or bounded:
+            E, e, _gap, _rank = _compress(rows @ Ws, rhs)
+            x = _solve_stage(_Stage(H, np.zeros(m), E, e, G, h, lo, hi, "compulsion"), solver, where, infeasible_ok)
+            if x is None:
+                return None
+            scaled_u.append(x)
+            return Ws @ x
+        # dependent reaction columns and no bounds: the unknowns are the reaction itself, w = Q ξ with Q an
+        # orthonormal basis of range(W) at this state (Hessian I for every backend). Off the manifold the
+        # columns are independent by the drift; range(W) still holds the kept rows' reactions there, so the
+        # acceleration is exactly the minimal model's.
+        Q = _range_basis(Ws)
+        E, e, _gap, _rank = _compress(rows @ Q, rhs)
+        free = np.full(Q.shape[1], np.inf)
+        st = _Stage(np.eye(Q.shape[1]), np.zeros(Q.shape[1]), E, e, -s.Jn[ge] @ Q, h, -free, free, "compulsion")
         xi = _solve_stage(st, solver, where, infeasible_ok)
-        return None if xi is None else V @ xi
+        return None if xi is None else Q @ xi
 
-    u: np.ndarray | None = None
+    w: np.ndarray | None = None
+    x_track: np.ndarray | None = None
     if track.any():  # first as if the bounds allowed the constraint to be kept: then nothing saturates
         St, rt = S[track], r[track]
-        Ek, ek, _gap, _rank = _compress(np.vstack([S[eq], St]), np.concatenate([r[eq], rt]))
+        both = np.concatenate([kept, np.flatnonzero(track)])
         stages.append("compulsion")
-        u = compulsion(Ek, ek, True)
-        if u is None:  # saturated: the least tracking error first, then the least compulsion
+        w = compulsion(s.Jn[both], r[both], True)
+        if w is None:  # saturated: the least tracking error first, then the least compulsion
             stages.append("track")
             # ‖S ũ − r‖² is only semidefinite when there are more actuators than rows; a Tikhonov term of
             # TRACK_REGULARIZATION (on the unit-sized problem) makes it definite for every backend
             P = St.T @ St + TRACK_REGULARIZATION * np.eye(m)
-            u1 = _solve_stage(_Stage(P, -St.T @ rt, E, e, G, h, lo, hi, "track"), solver, where)
-            assert u1 is not None
+            E, e, _gap, _rank = _compress(S[kept], r[kept])
+            x_track = _solve_stage(_Stage(P, -St.T @ rt, E, e, G, h, lo, hi, "track"), solver, where)
+            assert x_track is not None
             # at the onset of saturation the error may be round-off small: the actuator is at its bound either way
-            tracking_error = float(np.linalg.norm(St @ u1 - rt))
-            E, e, gap, rank = _compress(np.vstack([S[eq], St]), np.concatenate([r[eq], St @ u1]))
-        else:
-            E, e = Ek, ek
-    if u is None:
+            tracking_error = float(np.linalg.norm(St @ x_track - rt))
+            w = compulsion(s.Jn[both], np.concatenate([r[kept], St @ x_track]))
+    if w is None:
         stages.append("compulsion")
-        u = compulsion(E, e)
-        assert u is not None
-    if rank_Ws < m:  # the acceleration fixes W u only: pick the least-norm reaction among those
-        _, _, VtW, rank_W = _svd_rank(W)  # (the unscaled unknowns: their norm is the one to minimize)
+        w = compulsion(s.Jn[kept], r[kept])
+        assert w is not None
+    # the reaction unknowns: least norm among those with W u = w (unique unless the columns are dependent)
+    u = scaled_u[-1] / cs if scaled_u else _truncated_pinv(s.W, rank_W) @ w
+    if rank_W < m:
         stages.append("least-norm")
-        rows, rhs = VtW[:rank_W], VtW[:rank_W] @ (u / cs)  # W u = W u*, in the original unknowns
-        if bounded:
-            u = _solve_stage(
+        if bounded:  # least ‖u‖ within the bounds, W u = w on the row space of W
+            _, _, VtW, _r = _svd_rank(s.W)
+            rows, rhs = VtW[:rank_W], VtW[:rank_W] @ u
+            x = _solve_stage(
                 _Stage(
                     np.diag(cs**-2.0), np.zeros(m), rows / cs, rhs, np.zeros((0, m)), np.zeros(0), lo, hi, "least-norm"
                 ),
                 solver,
                 where,
             )
-        else:
-            u = (rows.T @ rhs) * cs
+            u = x / cs
     lo, hi = p.lower.astype(float), p.upper.astype(float)
-    u, tracking_error = np.clip(u / cs * unit, lo, hi), tracking_error * unit
-    a = p.a0 + np.linalg.solve(L.T, W @ u)
+    u, tracking_error = np.clip(u * unit, lo, hi), tracking_error * unit
     finite_lo, finite_hi = np.isfinite(lo), np.isfinite(hi)
     tol = 1e-9 * (1.0 + np.abs(u))
-    at_bound = (finite_lo & (u - lo <= tol)) | (finite_hi & (hi - u <= tol))
-    at_bound &= finite_lo | finite_hi
+    at_lo, at_hi = finite_lo & (u - lo <= tol), finite_hi & (hi - u <= tol)
+    at_bound = at_lo | at_hi
+    if bounded:  # a saturated actuator delivers its bound (not the backend's round-off of it), and that is the reaction
+        u = np.where(at_hi, hi, np.where(at_lo, lo, u))
+        w = s.W @ u / unit
+    a = p.a0 + np.linalg.solve(s.L.T, w * unit)
     return GaussSolution(
         a=a,
         u=u,
-        compulsion=float(np.sum((W @ u) ** 2)),
+        compulsion=float(np.sum((w * unit) ** 2)),
         residual=p.J @ a - p.phi,
         tracking_error=tracking_error,
         at_bound=at_bound,
@@ -453,3 +528,15 @@ def solve_general(
         redundant_rows=redundant,
         S_norm=S,
     )
+
+
+def _range_basis(M: np.ndarray) -> np.ndarray:
+    """An orthonormal basis of ``range(M)`` (numerical rank: singular values above 1e-13 of the largest)."""
+    U, s, _ = np.linalg.svd(M, full_matrices=False)
+    return U[:, : int(np.sum(s > 1e-13 * max(float(s[0]) if s.size else 0.0, 1e-300)))]
+
+
+def _truncated_pinv(M: np.ndarray, rank: int) -> np.ndarray:
+    """The pseudo-inverse of ``M`` restricted to its ``rank`` largest singular values."""
+    U, s, Vt = np.linalg.svd(M, full_matrices=False)
+    return (Vt[:rank].T / s[:rank]) @ U[:, :rank].T

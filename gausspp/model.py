@@ -15,9 +15,10 @@ import casadi as ca
 import numpy as np
 
 from . import qp
-from ._outcome import Group, Where, evaluation_failed, to_result
+from ._outcome import Group, Where, evaluation_failed, to_result, warn_small_margin
 from .constraints import Constraint, Unilateral
 from .errors import (
+    GaussppError,
     InputError,
     MissingMultiplierError,
     NonFiniteError,
@@ -30,10 +31,18 @@ from .gauss_qp import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backen
 from .kernel import Kernel, _Bound, _dense, _load, build_kernel
 from .problem import StepProblem
 from .realizability import cosines
+from .redundancy import CLEARLY_INDEPENDENT, independent_rows
 from .results import ImpactResult, StepResult
 from .step import StepExpressions
 
 SOLVERS = ("qp", "direct")
+#: Nearest state on the manifold: a row residual (as a coordinate distance) above this fraction of the state's
+#: size means that the dependent rows cannot hold together — they contradict each other.
+REACH_TOL = 1e-8
+_DIRECT_NEEDS_INDEPENDENT_ROWS = (
+    " (solver='direct' needs independent rows; solver='qp' returns the unique acceleration "
+    "and the least-norm multiplier when the rows are redundant)"
+)
 _NO_STAB = np.zeros(2)
 
 
@@ -115,6 +124,7 @@ class Model:
         self._kernels: dict[tuple[str, str | None], Kernel] = {}
         self._data_fn: ca.Function | None = None
         self._projection: ca.Function | None = None
+        self._kinematics_fn: ca.Function | None = None
 
     def _assemble(self) -> None:
         mech = self.mechanism
@@ -319,15 +329,35 @@ class Model:
         except RuntimeError as exc:  # casadi refused to evaluate (e.g. a QP plugin given NaN data)
             raise evaluation_failed(exc, where, margin_error=self.margin_error) from None
         try:
-            return to_result(out, where, margin_warn=self.margin_warn, margin_error=self.margin_error)
+            result = to_result(out, where, margin_warn=0.0, margin_error=self.margin_error)
         except RealizabilityError as exc:
             if solver == "direct":
-                exc.args = (
-                    f"{exc} (solver='direct' needs independent rows; solver='qp' returns the unique acceleration "
-                    "and the least-norm multiplier when the rows are redundant)",
-                )
+                exc.args = (f"{exc}{_DIRECT_NEEDS_INDEPENDENT_ROWS}",)
                 raise
             return self._redundant_step(t, q, v, lam, exc, backend)
+        if result.margin >= self.margin_warn:
+            return result
+        # A small margin: nearly dependent rows. If they are dependent on the constraint manifold (and
+        # independent here only by round-off or drift), solving them exactly would amplify the drift by
+        # 1/margin — the general QP keeps the independent rows instead (gausspp.redundancy).
+        if self.k > 1:
+            try:
+                general, solution = self.general_step(t, q, v, lam, backend=_backend_name(backend))
+            except GaussppError:
+                general, solution = None, None
+            if solution is not None and solution.redundant_rows > 0:
+                if solver == "direct":
+                    raise RealizabilityError(
+                        f"the constraint rows are redundant on the constraint manifold at t={t:.6g} (margin here "
+                        f"{result.margin:.3g}, by the state's distance from the manifold)"
+                        + _DIRECT_NEEDS_INDEPENDENT_ROWS,
+                        t=t,
+                        constraint=", ".join(self.names),
+                        margin=result.margin,
+                    )
+                return general
+        warn_small_margin(result.margin, t, self._groups, self.margin_warn)
+        return result
 
     def _redundant_step(
         self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, exc: Exception, backend: Any
@@ -431,7 +461,9 @@ class Model:
             a0 = np.zeros(self.nv)  # the QP's Cholesky reports the singular A
         m = self.m
         problem = self._gauss_problem(t, A, a0, J, phi, D, Jc, phic[closed], closed)
-        sol = solve_general(problem, backend, consistency_tol)
+        sol = solve_general(
+            problem, backend, consistency_tol, reference=lambda: self._reference_problem(t, q, v, lam, stab, closed)
+        )
         u = sol.u[:m]
         contact_force = np.zeros(len(self.contact_row_names))
         contact_force[closed] = sol.u[m:]
@@ -464,6 +496,98 @@ class Model:
             "S_norm": sol.S_norm[: self.k, :m],
         }
         return result, sol, extras
+
+    def _reference_problem(
+        self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, stab: Any, closed: np.ndarray
+    ) -> GaussProblem | None:
+        """The step problem at the nearest state on the constraint manifold, where redundancy is decided.
+
+        ``None`` when the state is on the manifold already (decide there). See :meth:`_nearest_on_manifold`.
+        """
+        q_ref, v_ref = self._nearest_on_manifold(t, q, v, lam)
+        if np.array_equal(q_ref, q) and np.array_equal(v_ref, v):
+            return None
+        A, f, r0, J, phi, D, Phi, g, _qd, _e, _p, _gc, Jc, phic, _gdc = self._general_data(t, q_ref, v_ref, lam, stab)
+        self._check_reachable(t, J.reshape(self.k, self.nv), Phi.ravel(), g.ravel(), q_ref, v_ref)
+        if not (np.all(np.isfinite(A)) and np.all(np.isfinite(f + r0))):
+            return None
+        try:
+            a0 = np.linalg.solve(A, (f + r0).ravel())
+        except np.linalg.LinAlgError:
+            return None
+        return self._gauss_problem(t, A, a0, J, phi, D, Jc, phic.ravel()[closed], closed)
+
+    def _check_reachable(
+        self, t: float, J: np.ndarray, Phi: np.ndarray, g: np.ndarray, q: np.ndarray, v: np.ndarray
+    ) -> None:
+        """Raise if the nearest state found is not on the constraints: then they contradict each other.
+
+        Each row's residual is measured as a distance in coordinates (``|g_i| / ‖J_i‖``, ``|Φ_i| / ‖J_i‖``)
+        against :data:`REACH_TOL` of the state's size.
+        """
+        norms = np.linalg.norm(J, axis=1)
+        norms[norms == 0] = 1.0
+        rows = self.holonomic_rows
+        off_q = np.abs(g[rows]) / norms[rows] / (1.0 + np.max(np.abs(q)))
+        off_v = np.abs(Phi) / norms / (1.0 + np.max(np.abs(v)))
+        worst = int(np.argmax(off_v)) if off_v.size else 0
+        if off_q.size and off_q.max() > REACH_TOL:
+            worst, size = rows[int(np.argmax(off_q))], float(off_q.max())
+        elif off_v.size and off_v.max() > REACH_TOL:
+            size = float(off_v.max())
+        else:
+            return
+        raise RealizabilityError(
+            f"the constraint rows are dependent and contradict each other at t={t:.6g}: no state near this one "
+            f"satisfies them all (row {self.row_names[worst]!r} stays off by {size:.2g} relative to the state's size) "
+            "— the redundant rows describe different constraints; remove one of them",
+            t=t,
+            constraint=self.row_names[worst],
+            margin=0.0,
+        )
+
+    def _nearest_on_manifold(
+        self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, iterations: int = 8
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The state on the constraints nearest ``(q, v)``, moving along the realizations' directions ``A⁻¹D``.
+
+        Gauss–Newton onto ``g(q, t) = 0`` (holonomic rows) in two phases: first with the rows that are clearly
+        independent here (:data:`~gausspp.redundancy.CLEARLY_INDEPENDENT`, in the order declared: a square
+        step on rows that are dependent on the manifold would be huge along their near-null direction), then
+        with every row in least squares; then ``v`` onto ``Φ = 0`` (affine in ``v``: one least-squares step).
+        Works with redundant rows, where the compiled projection (:func:`gausspp.drift.projection_function`)
+        cannot.
+        """
+        if self._kinematics_fn is None:
+            mech = self.mechanism
+            self._kinematics_fn = ca.Function("K", [mech.t, mech.q, mech.v], [ca.jacobian(mech.qdot, mech.v)])
+        rows, k, nv = self.holonomic_rows, self.k, self.nv
+        cols = [c for grp in self._groups if grp.rows.start in rows for c in range(grp.cols.start, grp.cols.stop)]
+        normalize = self.mechanism.normalize_array
+
+        def correction(A: np.ndarray, J: np.ndarray, D: np.ndarray, residual: np.ndarray) -> np.ndarray:
+            AinvD = np.linalg.solve(A, D)
+            return AinvD @ np.linalg.lstsq(J @ AinvD, residual, rcond=1e-10)[0]
+
+        q_ref = q.copy()
+        for phase in ("clear", "all") if rows else ():
+            previous = np.inf
+            for _ in range(iterations):
+                A, _f, _r0, J, _phi, D, _Phi, g, *_ = self._general_data(t, q_ref, v, lam, _NO_STAB)
+                J, g, D = J.reshape(k, nv)[rows], g.ravel()[rows], D.reshape(nv, self.m)[:, cols]
+                use = np.arange(len(rows))
+                if phase == "clear":
+                    use, _ = independent_rows(np.linalg.solve(np.linalg.cholesky(A), J.T).T, CLEARLY_INDEPENDENT)
+                size = float(np.max(np.abs(g[use]), initial=0.0))
+                if not size < previous or size == 0.0:  # converged to round-off (or no longer converging)
+                    break
+                previous = size
+                step = correction(A, J[use], D, g[use])
+                q_ref = normalize(q_ref - np.array(self._kinematics_fn(t, q_ref, v)) @ step)
+        A, _f, _r0, J, _phi, D, Phi, *_ = self._general_data(t, q_ref, v, lam, _NO_STAB)
+        Phi = Phi.ravel()
+        v_ref = v - correction(A, J.reshape(k, nv), D.reshape(nv, self.m), Phi) if np.any(Phi) else v
+        return q_ref, v_ref
 
     def step_data(self, t: float, q: Any, v: Any, lam: Any = None) -> StepProblem:
         """The step's ``A, f = F − h, r₀, J, φ, D, Φ`` as numbers (no checks on their values)."""

@@ -140,11 +140,11 @@ def simulate(
         )
     stab = as_stabilization(stabilize, dt)
     q, v, lam = _initial_state(model, t0, q0, v0, lam0)
+    redundant = _redundant_rows(model, solver, backend, t0, q, v, lam)
     if stab.project:
-        q, v = _project_initial(model, t0, q, v, lam, constraint_tol)
+        q, v = _project_initial(model, t0, q, v, lam, constraint_tol, redundant)
     _check_on_constraint(model, t0, q, v, lam, constraint_tol)
 
-    redundant = _redundant_rows(model, solver, backend, t0, q, v, lam)
     general = model.bounded or redundant
     rhs: AnyRightHandSide
     if general:
@@ -219,7 +219,13 @@ def _initial_state(model: Model, t0: float, q0: Any, v0: Any, lam0: Any) -> tupl
     return q, v, lam
 
 
-def _project(model: Model) -> Callable[[float, np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+def _project(
+    model: Model, redundant: bool = False
+) -> Callable[[float, np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """The projection onto the constraints along ``A⁻¹D``: compiled, or (redundant rows, where the compiled one's
+    square solves are singular) the model's least-squares Newton."""
+    if redundant:
+        return model._nearest_on_manifold
     if model._projection is None:
         model._projection = projection_function(model)
     fn = model._projection
@@ -237,10 +243,17 @@ def _residuals(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.nda
 
 
 def _project_initial(
-    model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, tol: float, max_steps: int = 50
+    model: Model,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    lam: np.ndarray,
+    tol: float,
+    redundant: bool = False,
+    max_steps: int = 50,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Newton steps of the projection until ``g`` and ``Φ`` are within ``tol/1000`` (or fail clearly)."""
-    project = _project(model)
+    project = _project(model, redundant)
     start, first_move = q.copy(), None
     for _ in range(max_steps):
         g, Phi = _residuals(model, t, q, v, lam)
@@ -305,7 +318,8 @@ def _fixed_step(
     n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
     keep = _keep_indices(n_steps, t0, dt, record)
     ts, ys = np.empty(keep.size), np.empty((keep.size, y0.size))
-    project = _project(model) if stab.project else None
+    redundant = isinstance(rhs, GeneralRightHandSide) and not rhs.margin_checked
+    project = _project(model, redundant) if stab.project else None
     nq, nv, nl = model.nq, model.nv, model.n_lam
     y, slot, t = y0.copy(), 0, t0
     failure = None
