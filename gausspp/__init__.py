@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from . import methods, plot, qp, realizability, report, scenes, sweeps
 from .constraints import Constraint, Holonomic, Unilateral
+from .crosscheck import CrossCheck, acceleration_qp, crosscheck
 from .drift import Baumgarte
 from .errors import (
     GaussppError,
@@ -39,8 +40,10 @@ from .trajectory import Trajectory
 __version__ = "0.1.0"
 
 __all__ = [
+    "acceleration_qp",
     "Baumgarte",
     "Constraint",
+    "CrossCheck",
     "Force",
     "GaussppError",
     "Holonomic",
@@ -74,6 +77,7 @@ __all__ = [
     "methods",
     "plot",
     "qp",
+    "crosscheck",
     "realizability",
     "report",
     "scenes",

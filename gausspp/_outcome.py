@@ -133,12 +133,7 @@ def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, m
             raise _not_positive_definite(d, t)
     S_norm = out["S_norm"]
     k, m = S_norm.shape if S_norm.ndim == 2 else (S_norm.size, 1)
-    if not finite and not np.isfinite(S_norm.sum()):
-        cos = np.zeros(min(k, m))
-    elif k == 1:  # the singular value of one row is its length
-        cos = np.array([np.sqrt(float(S_norm.ravel() @ S_norm.ravel()))])
-    else:
-        cos = np.linalg.svd(S_norm.reshape(k, m), compute_uv=False)
+    cos = np.zeros(min(k, m)) if not finite and not np.isfinite(S_norm.sum()) else singular_values(S_norm, k, m)
     margin = float(cos[-1]) if k <= m and cos.size else 0.0
     if margin < margin_error:
         raise _unrealizable(data(), t, margin, groups, margin_error)
@@ -150,10 +145,11 @@ def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, m
     qp_res = None
     if solver != "direct":
         primal, dual = float(out["qp_primal"][0]), float(out["qp_dual"][0])
-        if not primal <= QP_TOLERANCE:
+        if not (primal <= QP_TOLERANCE and dual <= QP_TOLERANCE):
             raise QPSolveError(
-                f"QP backend {solver} did not solve the step {_where(t)}: relative primal residual {primal:.3g} "
-                f"(realizability margin {margin:.3g}); try another backend (gausspp.qp.names()) or solver='direct'"
+                f"QP backend {solver} did not solve the step {_where(t)}: relative primal residual {primal:.3g}, "
+                f"dual residual {dual:.3g} (realizability margin {margin:.3g}); try another backend "
+                "(gausspp.qp.names()) or solver='direct'"
             )
         qp_res = (primal, dual)
     return StepResult(
@@ -182,3 +178,21 @@ def warn_small_margin(margin: float, t: float, groups: list[Group], margin_warn:
             RealizabilityWarning,
             stacklevel=stacklevel,
         )
+
+
+def singular_values(S_norm: np.ndarray, k: int, m: int) -> np.ndarray:
+    """Singular values of the normalized ``S`` (k × m), largest first; for one row, its length."""
+    if k == 1:
+        row = S_norm.ravel()
+        return np.array([np.sqrt(float(row @ row))])
+    return np.linalg.svd(S_norm.reshape(k, m, order="F"), compute_uv=False)
+
+
+def step_margin(S_norm: np.ndarray, k: int, m: int) -> float:
+    """The realizability margin ``σ_k`` of the normalized ``S``: 0 when ``S`` is singular or has more rows than
+    columns; NaN in, NaN out (the caller's finite check fails)."""
+    if k == 0:
+        return 1.0
+    if k > m:
+        return 0.0
+    return float(singular_values(S_norm, k, m)[k - 1])

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import qp
-from ._outcome import QP_TOLERANCE, Where, evaluation_failed, to_result
+from ._outcome import QP_TOLERANCE, Where, evaluation_failed, step_margin, to_result
 from .drift import Stabilization
 from .errors import NonFiniteError
 from .model import Model
@@ -30,7 +30,6 @@ class RightHandSide:
         m = model
         self._slices = (slice(0, m.nq), slice(m.nq, m.nq + m.nv), slice(m.nq + m.nv, m.nq + m.nv + m.n_lam))
         self._lam_cols = np.array(model.lam_columns, dtype=int)
-        self._scalar_margin = model.k == 1
 
     def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
         """Evaluate the step at ``(t, y)``; raise a project error if it fails."""
@@ -49,9 +48,8 @@ class RightHandSide:
             raise evaluation_failed(exc, where, margin_error=m.margin_error) from None
         out = self.kernel.result()
         ok = out["pivot"][0] > 0 and np.isfinite(out["checksum"][0]) and out["qp_primal"][0] <= QP_TOLERANCE
-        if ok and self._scalar_margin:  # one constraint row: the margin is the length of that row of S
-            row = out["S_norm"].ravel()
-            ok = float(np.sqrt(row @ row)) >= self.model.margin_error
+        if ok:  # the realizability margin, at every evaluation (DESIGN §2): σ_min of the normalized S
+            ok = step_margin(out["S_norm"], self.model.k, self.model.m) >= self.model.margin_error
         if not ok:  # diagnose: raises the project error that explains the failure
             size = float(np.max(np.abs(y)))
             if not size < 1e100:

@@ -121,7 +121,7 @@ class Model:
         #: True if some realization has bounds on its reaction (bounded servo, :class:`~gausspp.Force`).
         self.bounded = any(b is not None for b in self._group_bounds)
         self._general_fn: _Bound | None = None
-        self._kernels: dict[tuple[str, str | None], Kernel] = {}
+        self._kernels: dict[tuple[str, str | None, bool], Kernel] = {}
         self._data_fn: ca.Function | None = None
         self._projection: ca.Function | None = None
         self._kinematics_fn: ca.Function | None = None
@@ -231,13 +231,17 @@ class Model:
         return None if self._lam0 is None else self._lam0.copy()
 
     # -- compiled kernels ------------------------------------------------------------------
-    def kernel(self, solver: str = "qp", backend: str | qp.QPBackend | None = None) -> Kernel:
+    def kernel(
+        self, solver: str = "qp", backend: str | qp.QPBackend | None = None, refine: bool | None = None
+    ) -> Kernel:
         """The compiled step for ``solver`` (and QP ``backend``), built on first use and kept.
 
         Its inputs are ``(t, q, v, lam, stab)`` (``stab`` = Baumgarte ``(α, β)``, zero for the exact
         step); write them into ``kernel.inputs`` and call ``kernel.evaluate()`` for the fastest
-        possible step, or call ``kernel(t, q, v, lam, stab)``.
+        possible step, or call ``kernel(t, q, v, lam, stab)``. ``refine`` overrides the model's
+        ``refine`` (``False``: each solver's raw answer).
         """
+        refine = self.refine if refine is None else bool(refine)
         if solver not in SOLVERS:
             raise UnknownNameError(f"solver={solver!r} is unknown; use one of {list(SOLVERS)}")
         if self.contacts or self.bounded:
@@ -248,11 +252,11 @@ class Model:
         if solver == "direct" and backend is not None:
             raise InputError(f"backend={backend!r} applies to solver='qp' only")
         chosen = qp.get(backend) if solver == "qp" else None
-        key = (solver, chosen.name if chosen else None)
+        key = (solver, chosen.name if chosen else None, refine)
         if key not in self._kernels or (
             chosen is not None and getattr(self._kernels[key], "backend", chosen) is not chosen
         ):
-            self._kernels[key] = build_kernel("step", self._inputs, self._expressions, solver, chosen, self.refine)
+            self._kernels[key] = build_kernel("step", self._inputs, self._expressions, solver, chosen, refine)
         return self._kernels[key]
 
     # -- checked entry points ---------------------------------------------------------------
@@ -292,6 +296,7 @@ class Model:
         *,
         solver: str = "qp",
         backend: str | qp.QPBackend | None = None,
+        refine: bool | None = None,
     ) -> StepResult:
         """Solve the step at ``(t, q, v, λ)``: Gauss's principle as a QP, or the direct formula.
 
@@ -305,6 +310,9 @@ class Model:
         solver : {"qp", "direct"}
         backend : str, optional
             QP backend name (see :func:`gausspp.qp.names`); default :data:`gausspp.qp.DEFAULT`.
+        refine : bool, optional
+            One step of iterative refinement after the solve (default: the model's ``refine``);
+            ``False`` returns the solver's raw answer (see :func:`gausspp.crosscheck`).
 
         Raises
         ------
@@ -321,7 +329,7 @@ class Model:
                     "step (inequalities); use solver='qp'"
                 )
             return self.general_step(t, q, v, lam, backend=_backend_name(backend))[0]
-        kernel = self.kernel(solver, backend)
+        kernel = self.kernel(solver, backend, refine)
         name = "direct" if solver == "direct" else qp.get(backend).name
         where = Where(t, name, self._groups, lambda: self.step_data(t, q, v, lam))
         try:
