@@ -233,9 +233,7 @@ def _saturated(model: Model, path: Path, start: int, stop: int, bounded: list[in
     known = np.array(
         [
             model.step_data(t, q, v, None if path.lam is None else path.lam[start + j]).D[:, cols] @ at[j]
-            for j, (t, q, v) in enumerate(
-                zip(path.t[start:stop], path.q[start:stop], path.v[start:stop], strict=True)
-            )
+            for j, (t, q, v) in enumerate(zip(path.t[start:stop], path.q[start:stop], path.v[start:stop], strict=True))
         ]
     )
     free = [i for i in range(len(model.constraints)) if i not in bounded]
@@ -314,7 +312,9 @@ def _clip(t: np.ndarray, ranges: list[tuple[int, int]], window: tuple[float, flo
     t1, t2 = float(window[0]), float(window[1])
     if not (t[0] <= t1 < t2 <= t[-1]):
         raise InputError(f"window ({t1:g}, {t2:g}) is outside the data [{t[0]:g}, {t[-1]:g}] or empty")
-    inside = [(a + int(np.searchsorted(t[a:b], t1)), a + int(np.searchsorted(t[a:b], t2, side="right"))) for a, b in ranges]
+    inside = [
+        (a + int(np.searchsorted(t[a:b], t1)), a + int(np.searchsorted(t[a:b], t2, side="right"))) for a, b in ranges
+    ]
     return [(a, b) for a, b in inside if b > a]
 
 
@@ -333,9 +333,7 @@ def _verify_piece(
 ) -> Verification:
     s = slice(piece.start, piece.stop)
     data = {"t": path.t[s], "q": path.q[s], "v": path.v[s], "a": None if path.a is None else path.a[s]}
-    d = integral.discretize(
-        piece.model, data, metric=metric, acceleration=acceleration, constraint_tol=constraint_tol
-    )
+    d = integral.discretize(piece.model, data, metric=metric, acceleration=acceleration, constraint_tol=constraint_tol)
     if piece.known is not None:  # a known reaction is an applied force: R = A ẍ − f − D u_bound
         known = piece.known[np.searchsorted(path.t[s], d.t)]
         d = replace(d, R=d.R - known, f=None if d.f is None else d.f + known)
@@ -369,7 +367,10 @@ def _jumps(model: Model, path: Path) -> tuple[int, list[str]]:
         plastic = [
             model.contact_row_names.index(e["contact"])
             for e in path.events
-            if e.get("kind") == "impact" and e.get("t") == t and e.get("plastic") and e["contact"] in model.contact_row_names
+            if e.get("kind") == "impact"
+            and e.get("t") == t
+            and e.get("plastic")
+            and e["contact"] in model.contact_row_names
         ]
         lam = None if path.lam is None else path.lam[i - 1]
         res = model.impact(t, path.q[i - 1], path.v[i - 1], lam, plastic=plastic)
@@ -386,11 +387,12 @@ def _jumps(model: Model, path: Path) -> tuple[int, list[str]]:
 def _skipped_lines(skipped: list[dict[str, Any]]) -> list[str]:
     """Skipped pieces in words; the many short pieces of a Zeno-like bounce sequence in one line."""
     short = [s for s in skipped if s["reason"].endswith(_SHORT)]
-    lines = [f"skipped [{s['t'][0]:.6g}, {s['t'][1]:.6g}] {s['what']}: {s['reason']}" for s in skipped if s not in short]
     if len(short) == 1:
-        s = short[0]
-        lines.append(f"skipped [{s['t'][0]:.6g}, {s['t'][1]:.6g}] {s['what']}: {s['reason']}")
-    elif short:
+        short = []
+    lines = [
+        f"skipped [{s['t'][0]:.6g}, {s['t'][1]:.6g}] {s['what']}: {s['reason']}" for s in skipped if s not in short
+    ]
+    if short:
         total = sum(s["t"][1] - s["t"][0] for s in short)
         lines.append(
             f"skipped {len(short)} pieces with fewer than {MIN_SAMPLES} samples each, {total:.3g} of the time in all, "
