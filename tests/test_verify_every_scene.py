@@ -133,3 +133,12 @@ def test_short_pieces_and_nodes_are_refused_clearly() -> None:
     sparse = {"t": traj.t[::40], "q": traj.q[::40], "v": traj.v[::40]}
     with pytest.raises(gp.InputError, match="nothing to verify.*samples; a piece needs at least"):
         gp.verify(scene.model, sparse)
+
+
+def test_redundant_rows_do_not_make_the_verdict_vacuous() -> None:
+    """Dependent constraint rows left the sparse QP with no solution (η = 0, every path 'a motion')."""
+    minimal = gp.scenes.get("four-bar-redundant", redundant=False)
+    traj = gp.simulate(minimal.model, minimal.q0, minimal.v0, 0.5, method="DOP853", rtol=1e-10, solver="direct")
+    assert gp.verify(gp.scenes.get("four-bar-redundant").model, traj).is_motion
+    other = gp.verify(gp.scenes.get("four-bar-redundant", g=9.0).model, traj)
+    assert not other.is_motion and other.relative_gap > other.tolerance
