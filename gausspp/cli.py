@@ -529,11 +529,15 @@ def _thin(traj: Trajectory, gap: float) -> Trajectory:
     """Drop samples closer than ``gap`` to the previous kept one (the last sample is kept).
 
     Adaptive integrators can end on a step of round-off size; such near-duplicate nodes spoil the
-    spline that (23) differentiates.
+    spline that (23) differentiates. The two samples of a velocity jump (an impact: same time,
+    before and after) are both kept: verification cuts the path there.
     """
     t, keep = traj.t, [0]
     for i in range(1, t.size):
-        if t[i] - t[keep[-1]] >= gap:
+        jump = t[i] <= t[i - 1]
+        if jump and keep[-1] != i - 1:
+            keep.append(i - 1)  # the sample just before the jump
+        if jump or t[i] - t[keep[-1]] >= gap:
             keep.append(i)
     if t.size and keep[-1] != t.size - 1:
         keep[-1] = t.size - 1
@@ -719,6 +723,8 @@ def verify(args: argparse.Namespace) -> int:
     ]
     if not result.is_motion:
         lines.append(("largest δx", f"at t = {result.t[worst]:.6g}: {_vector(result.delta_x[worst])}"))
+    if result.pieces or result.skipped:
+        lines += [("pieces", line) for line in result.message.splitlines()[1:]]
     for key, value in lines:
         print(f"  {key:14s} {value}")
     verdict = "a motion of the model" if result.is_motion else "NOT a motion of the model"

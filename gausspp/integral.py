@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import casadi as ca
@@ -35,6 +35,7 @@ import scipy.sparse as sp
 from scipy.interpolate import make_interp_spline
 
 from .errors import InitialDataError, InputError, NonFiniteError, QPSolveError, ShapeError
+from .gauss_qp import RANK_TOL
 from .model import Model
 
 #: Relative gap below which a path counts as a motion whatever the refinement says (round-off).
@@ -54,7 +55,8 @@ class Verification:
     minimum : float
         The minimum of the left side of (23) over admissible variations.
     gap, relative_gap : float
-        ``value_at_zero − minimum ≥ 0`` and ``gap / value_at_zero``.
+        ``value_at_zero − minimum ≥ 0`` and the gap over :func:`normalizer` (``value_at_zero``
+        unless the path has no relation rows).
     coarse_relative_gap : float
         The relative gap on every other node: a motion's gap falls under refinement, a
         non-motion's does not.
@@ -67,6 +69,13 @@ class Verification:
         ``λ`` recovered from the discrete (20), at the nodes (NaN where undefined: the ends of
         pointwise rows).
     method : str
+    pieces : tuple of Verification
+        A trajectory with events (contacts) or actuator saturation is verified piece by piece
+        (:mod:`gausspp.pieces`): the verification of each smooth piece; empty for one smooth path.
+    skipped : tuple of dict
+        Pieces that were not verified, each ``{"t": (t1, t2), "reason": str}``.
+    message : str
+        What was checked, in words (and what was not).
     """
 
     t: np.ndarray
@@ -80,6 +89,9 @@ class Verification:
     delta_x: np.ndarray
     multipliers: np.ndarray
     method: str
+    pieces: tuple[Verification, ...] = ()
+    skipped: tuple[dict[str, Any], ...] = ()
+    message: str = ""
 
 
 @dataclass(frozen=True)
@@ -87,7 +99,9 @@ class Discretized:
     """(23) on nodes: ``R``, metric ``G`` and the relation (20) per constraint row.
 
     ``E1``/``E0`` are ``(N+1, k, n)``; rows with ``pointwise[r]`` true have ``E1 = 0`` and hold
-    at each interior node, the others on each interval by the midpoint rule.
+    at each interior node, the others on each interval by the midpoint rule. ``f`` (optional)
+    is the known force ``F − h`` (plus any known reaction), the scale of a path with no relation
+    rows (see :func:`normalizer`).
     """
 
     t: np.ndarray
@@ -96,12 +110,14 @@ class Discretized:
     E1: np.ndarray
     E0: np.ndarray
     pointwise: np.ndarray
+    f: np.ndarray | None = None
 
     def every_other(self) -> Discretized:
         idx = np.arange(0, self.t.size, 2)
         if idx[-1] != self.t.size - 1:
             idx = np.append(idx, self.t.size - 1)
-        return Discretized(self.t[idx], self.R[idx], self.G[idx], self.E1[idx], self.E0[idx], self.pointwise)
+        f = None if self.f is None else self.f[idx]
+        return Discretized(self.t[idx], self.R[idx], self.G[idx], self.E1[idx], self.E0[idx], self.pointwise, f)
 
 
 # -- model side: the data of (23) along a path --------------------------------------------------
@@ -119,12 +135,9 @@ def _data_function(model: Model) -> ca.Function:
     p = model._expressions
     assert p.g is not None  # a model's step always carries its holonomic residuals
     R = p.A @ a - p.f
-    fn = ca.Function(
-        "integral_data",
-        [mech.t, mech.q, mech.v, a],
-        [R, p.A, ca.vertcat(*E1s), ca.vertcat(*E0s), p.Phi, p.g],
-    )
-    fn.pointwise = np.array(pointwise)  # type: ignore[attr-defined]
+    E1, E0 = (ca.vertcat(ca.SX(0, mech.nv), *E) for E in (E1s, E0s))  # no rows: a free model (contact flight)
+    fn = ca.Function("integral_data", [mech.t, mech.q, mech.v, a], [R, p.A, E1, E0, p.Phi, p.g, p.f])
+    fn.pointwise = np.array(pointwise, dtype=bool)  # type: ignore[attr-defined]
     return fn
 
 
@@ -136,6 +149,18 @@ def _path(trajectory: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
         raise InputError("the trajectory must provide numeric t, q and v (a Trajectory or a mapping)") from None
     a = get("a", None)
     return t, np.atleast_2d(q.T).T, np.atleast_2d(v.T).T, None if a is None else np.atleast_2d(np.asarray(a, float).T).T
+
+
+def check_samples(t: np.ndarray, q: np.ndarray, v: np.ndarray, *, monotone: bool = True) -> None:
+    """Finite samples, at least 2, with ``t`` strictly increasing (or, ``monotone=False``, non-decreasing:
+    a trajectory with velocity jumps records two samples at each jump's time)."""
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
+        bad = int(np.flatnonzero(~(np.isfinite(q).all(1) & np.isfinite(v).all(1) & np.isfinite(t)))[0])
+        raise NonFiniteError(f"trajectory: sample {bad} (t={t[bad]:.6g}) is not finite; cut the window before it")
+    step = np.diff(t)
+    if t.size < 2 or np.any(step <= 0 if monotone else step < 0):
+        order = "strictly increasing" if monotone else "non-decreasing"
+        raise InputError(f"trajectory: t must be {order} with at least 2 samples")
 
 
 def discretize(
@@ -155,11 +180,7 @@ def discretize(
         raise ShapeError(
             f"trajectory: q and v must be ({N}, {model.nq}) and ({N}, {model.nv}), got {q.shape}, {v.shape}"
         )
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q)) and np.all(np.isfinite(v))):
-        bad = int(np.flatnonzero(~(np.isfinite(q).all(1) & np.isfinite(v).all(1) & np.isfinite(t)))[0])
-        raise NonFiniteError(f"trajectory: sample {bad} (t={t[bad]:.6g}) is not finite; cut the window before it")
-    if N < 2 or np.any(np.diff(t) <= 0):
-        raise InputError("trajectory: t must be strictly increasing with at least 2 samples")
+    check_samples(t, q, v)
     # samples closer than 1e-9 of the span (an adaptive integrator's last sliver of a step) carry no
     # information and would spoil the splines: keep the later of each such pair
     keep = np.append(np.diff(t) > 1e-9 * (t[-1] - t[0]), True)
@@ -194,11 +215,11 @@ def discretize(
         )
     fn = _data_function(model)
     out = fn.map(tn.size)(tn[None, :], qn.T, vn.T, an.T)
-    R, A, E1, E0, Phi, g = (np.array(x) for x in out)
-    n, k = model.nv, model.k
+    R, A, E1, E0, Phi, g, f = (np.array(x) for x in out)
+    n, k, N1 = model.nv, model.k, tn.size
     r = fn.pointwise.size  # type: ignore[attr-defined]  # rows of the relations (20): k unless a realization has more
-    Phi, g = Phi.reshape(k, -1), g.reshape(k, -1)
-    worst = float(max(np.abs(Phi).max(), np.abs(g).max()))
+    Phi, g = Phi.reshape(k, N1), g.reshape(k, N1)
+    worst = float(max(np.abs(Phi).max(initial=0.0), np.abs(g).max(initial=0.0)))
     if worst > constraint_tol:
         i = int(np.argmax(np.abs(Phi).max(0) + np.abs(g).max(0)))
         raise InitialDataError(
@@ -209,11 +230,12 @@ def discretize(
     G = _metric(metric, A, n)
     return Discretized(
         t=tn,
-        R=R.reshape(n, -1).T,
+        R=R.reshape(n, N1).T,
         G=G,
-        E1=E1.reshape(r, -1, n).transpose(1, 0, 2),
-        E0=E0.reshape(r, -1, n).transpose(1, 0, 2),
+        E1=E1.reshape(r, N1, n).transpose(1, 0, 2),
+        E0=E0.reshape(r, N1, n).transpose(1, 0, 2),
         pointwise=fn.pointwise,  # type: ignore[attr-defined]
+        f=f.reshape(n, N1).T,
     )
 
 
@@ -239,11 +261,29 @@ def _weights(t: np.ndarray) -> np.ndarray:
     return w
 
 
+def _mean_square(t: np.ndarray, G: np.ndarray, X: np.ndarray) -> float:
+    """``(1/T) ∫ (G⁻¹X, X) dt`` by the trapezoid rule."""
+    quad = np.einsum("ni,ni->n", X, np.linalg.solve(G, X[..., None])[..., 0])
+    return float(_weights(t) @ quad / (t[-1] - t[0]))
+
+
 def value_at_zero(d: Discretized) -> float:
     """``(1/T) ∫ (G⁻¹R, R) dt`` by the trapezoid rule."""
-    w = _weights(d.t)
-    quad = np.einsum("ni,ni->n", d.R, np.linalg.solve(d.G, d.R[..., None])[..., 0])
-    return float(w @ quad / (d.t[-1] - d.t[0]))
+    return _mean_square(d.t, d.G, d.R)
+
+
+def normalizer(d: Discretized) -> float:
+    """What the gap is measured against: ``value_at_zero``, or for a path with no relation rows the forces' size.
+
+    With relation rows the relative gap is the share of ``(G⁻¹R, R)`` that does work on admissible
+    variations. Without any (a free piece: a body in flight between contacts, a saturated servo
+    whose force is known) every variation is admissible, the gap is all of ``value_at_zero`` and
+    the relative gap would be 1 for any path; there ``R = A ẍ − f`` must vanish, and the gap is
+    measured against ``(1/T) ∫ (G⁻¹Aẍ, Aẍ) + (G⁻¹f, f) dt``, the size of the terms it balances.
+    """
+    if d.E0.shape[1] or d.f is None:
+        return value_at_zero(d)
+    return _mean_square(d.t, d.G, d.R + d.f) + _mean_square(d.t, d.G, d.f)
 
 
 def solve_qp(d: Discretized) -> tuple[float, np.ndarray, np.ndarray]:
@@ -254,16 +294,18 @@ def solve_qp(d: Discretized) -> tuple[float, np.ndarray, np.ndarray]:
     w, h = _weights(d.t), np.diff(d.t)
     H = sp.block_diag([w[i] * d.G[i] for i in range(1, N1 - 1)], format="csc")
     g = np.concatenate([w[i] * d.R[i] for i in range(1, N1 - 1)])
-    row_kind: list[tuple[str, int, int]] = []  # ("node", i, r) or ("interval", j, r) per constraint row
+    row_kind: list[tuple[str, int, int]] = []  # ("interval", j, r) per differential constraint row
     blocks: list[sp.spmatrix] = []
     point = np.flatnonzero(d.pointwise)
     diff = np.flatnonzero(~d.pointwise)
+    back: list[tuple[int, np.ndarray]] = []  # per node with pointwise rows: (i, P) with μ = P y
     if point.size:
         for i in range(1, N1 - 1):
-            B = sp.lil_matrix((point.size, m * n))
-            B[:, (i - 1) * n : i * n] = d.E0[i][point]
+            rows, P = _independent_rows(d.E0[i][point])
+            B = sp.lil_matrix((rows.shape[0], m * n))
+            B[:, (i - 1) * n : i * n] = rows
             blocks.append(B)
-            row_kind += [("node", i, int(r)) for r in point]
+            back.append((i, P))
     if diff.size:
         for j in range(N1 - 1):
             E1 = 0.5 * (d.E1[j][diff] + d.E1[j + 1][diff])
@@ -282,16 +324,32 @@ def solve_qp(d: Discretized) -> tuple[float, np.ndarray, np.ndarray]:
     value = float(g @ x + 0.5 * x @ (H @ x))  # Σ w (Rη + ½ηGη)
     lam = np.full((N1, k), np.nan)
     mids = np.full((N1 - 1, k), np.nan)
-    for (kind, i, r), yi in zip(row_kind, y, strict=True):
-        if kind == "node":
-            lam[i, r] = -yi / w[i]
-        else:
-            mids[i, r] = -yi / h[i]
+    at = 0
+    for i, P in back:
+        lam[i, point] = -(P @ y[at : at + P.shape[1]]) / w[i]
+        at += P.shape[1]
+    for (_kind, j, r), yj in zip(row_kind, y[at:], strict=True):
+        mids[j, r] = -yj / h[j]
     if diff.size:  # midpoints → nodes: average inside, extrapolate at the ends
         lam[1:-1, diff] = 0.5 * (mids[:-1, diff] + mids[1:, diff])
         lam[0, diff] = 1.5 * mids[0, diff] - 0.5 * mids[1, diff]
         lam[-1, diff] = 1.5 * mids[-1, diff] - 0.5 * mids[-2, diff]
     return 2.0 * value / (d.t[-1] - d.t[0]), eta, lam
+
+
+def _independent_rows(E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Orthonormal rows ``Vᵣᵀ`` spanning the rows of ``E = U S Vᵀ`` and the map ``P = Uᵣ Sᵣ⁻¹`` back.
+
+    Dependent rows (redundant constraints: the rows of ``J`` of a closed loop given twice) make
+    the QP's equality matrix rank-deficient, and the sparse QR then returns no solution at all
+    (``η = 0``: a vacuous verdict). ``Vᵣᵀ η = 0`` has the same solutions as ``E η = 0``; a
+    multiplier ``y`` of the former is ``μ = P y`` of the latter, the one of least norm.
+    """
+    if E.shape[0] == 0:
+        return E, np.zeros((0, 0))
+    U, S, Vt = np.linalg.svd(E, full_matrices=False)
+    r = int(np.sum(S > RANK_TOL * max(S[0], np.finfo(float).tiny)))
+    return Vt[:r], U[:, :r] / S[:r]
 
 
 def _conic(H: sp.spmatrix, g: np.ndarray, B: sp.spmatrix) -> tuple[np.ndarray, np.ndarray]:
@@ -368,12 +426,37 @@ def verify(
         recorded accelerations (measured data).
 
     An over-actuated :class:`~gausspp.Force` enters with the relations of its least-compulsion
-    reaction, ``S H⁻¹ M δx = 0``, so a path with another allocation is not a motion. Actuator
-    bounds and unilateral contacts are not part of (23) here: verify a contact motion phase by
-    phase, and a bounded servo while it does not saturate.
+    reaction, ``S H⁻¹ M δx = 0``, so a path with another allocation is not a motion.
+
+    A model with unilateral contacts or bounded actuators is verified in smooth pieces, each by
+    the law that held on it (:mod:`gausspp.pieces`): between impacts and lift-offs with the closed
+    contacts as ideal constraints (and the jumps against the impact law), on saturated intervals
+    with the actuators' force at its bound as a known force. A failed run (``success`` false)
+    is verified on what was computed, and ``message`` says so. Both need the samples
+    themselves (``nodes`` must be ``None``). The result's ``pieces``, ``skipped`` and ``message``
+    say what was checked; a trajectory of which no piece can be checked raises
+    :class:`~gausspp.InputError` with the reasons.
     """
     if method not in ("qp", "closed-form"):
         raise InputError(f"method={method!r} is unknown; use 'qp' or 'closed-form'")
+    failed = getattr(trajectory, "status", "success") != "success"
+    if model.contacts or model.bounded or failed:
+        if nodes is not None:
+            raise InputError(
+                f"nodes={nodes} resamples one smooth path; this trajectory (contacts, bounded actuators or a failed "
+                "run) is verified piece by piece at its own samples: leave nodes=None"
+            )
+        from .pieces import verify_pieces
+
+        return verify_pieces(
+            model,
+            trajectory,
+            window=window,
+            metric=metric,
+            method=method,
+            acceleration=acceleration,
+            constraint_tol=constraint_tol,
+        )
     d = discretize(
         model,
         trajectory,
@@ -383,14 +466,27 @@ def verify(
         acceleration=acceleration,
         constraint_tol=constraint_tol,
     )
+    ver = judge(d, method)
+    return replace(ver, message=f"[{d.t[0]:.6g}, {d.t[-1]:.6g}] one smooth path: {verdict(ver)}")
+
+
+def verdict(ver: Verification) -> str:
+    """The verdict in words, with the figures it rests on."""
+    word = "a motion" if ver.is_motion else "NOT a motion"
+    return f"{word} (relative gap {ver.relative_gap:.2e}, tolerance {ver.tolerance:.2e}, {ver.t.size} nodes)"
+
+
+def judge(d: Discretized, method: str = "qp") -> Verification:
+    """Solve the discretized (23) on ``d`` and on every other node, and give the verdict."""
     solve = solve_qp if method == "qp" else solve_closed_form
     difference, eta, lam = solve(d)
-    zero = value_at_zero(d)
-    gap = max(-difference, 0.0)
+    zero, scale = value_at_zero(d), normalizer(d)
+    gap = max(0.0, -difference)  # (never −0.0)
     coarse = d.every_other()
     coarse_gap = max(-solve(coarse)[0], 0.0) if coarse.t.size >= 5 else np.nan
-    rel = gap / zero if zero > 0 else 0.0
-    coarse_rel = coarse_gap / value_at_zero(coarse) if zero > 0 else 0.0
+    rel = gap / scale if scale > 0 else 0.0
+    coarse_scale = normalizer(coarse)
+    coarse_rel = coarse_gap / coarse_scale if coarse_scale > 0 else 0.0
     tol = max(GAP_FLOOR, coarse_rel / 8) if np.isfinite(coarse_rel) else GAP_FLOOR
     return Verification(
         t=d.t,
