@@ -66,6 +66,8 @@ RANK_TOL = 1e-9
 CONSISTENCY_TOL = 1e-8
 #: Relative violation of a stage's constraints above which the backend is deemed to have failed.
 FEASIBILITY_TOL = 1e-7
+#: Relative dual residual (stationarity) of a stage's answer above which it is deemed not optimal.
+DUAL_TOL = 1e-7
 #: Tikhonov weight in the track stage (the problem is unit-sized): the tracking error is minimal to about this.
 TRACK_REGULARIZATION = 1e-12
 #: A point the backend itself calls inaccurate is accepted only if it is optimal to this (the problems are unit-sized).
@@ -278,6 +280,16 @@ def _solve_stage(st: _Stage, backend: str, where: str, infeasible_ok: bool = Fal
             f"{backend} returned a point that violates the {st.name} stage's constraints by {viol:.2e}{where}; "
             "try another backend (daqp is exact, osqp iterative)"
         )
+    if sol.found:  # optimality, not only feasibility: the dual residual where the backend reports multipliers
+        dual = float(sol.dual_residual())
+        size = 1.0 + float(np.max(np.abs(st.P @ x), initial=0.0)) + float(np.max(np.abs(st.q), initial=0.0))
+        if np.isfinite(dual) and dual > DUAL_TOL * size:
+            if infeasible_ok:
+                return None
+            raise QPSolveError(
+                f"{backend} returned a point that is not optimal on the {st.name} stage of the Gauss QP{where} "
+                f"(relative dual residual {dual / size:.2e}); try another backend (daqp is exact, osqp iterative)"
+            )
     return np.clip(x, st.lo, st.hi)
 
 
