@@ -367,7 +367,9 @@ def _demo_general() -> None:
     first = default_backend()  # daqp when installed, else OSQP: then there is no second backend to compare with
     second = None if first == "osqp" else "osqp"
     versus = f"{first} vs {second}" if second else "backends"
-    compared = f"{first}, compared with {second}" if second else f"{first} only; daqp not installed — `pip install daqp`"
+    compared = (
+        f"{first}, compared with {second}" if second else f"{first} only; daqp not installed — `pip install daqp`"
+    )
     print(f"\nBeyond closed forms — the general Gauss QP ({compared}), DOP853 rtol 1e-11:\n")
     header = (
         f"{'scene':19s} {'what':28s} {'T':>5s} {'events':>6s} {'saturated':>9s} {versus:>12s} "
@@ -405,9 +407,7 @@ def _demo_general() -> None:
         energy = f"{np.nanmax(balance):.1e}" if np.isfinite(balance).any() else "—"
         exact = "—"
         if scene.exact is not None:
-            exact = (
-                f"{max(float(np.abs(scene.exact(t)[0] - q).max()) for t, q in zip(run.t, run.q, strict=True)):.1e}"
-            )
+            exact = f"{max(float(np.abs(scene.exact(t)[0] - q).max()) for t, q in zip(run.t, run.q, strict=True)):.1e}"
         saturated = f"{run.saturated.any(axis=1).mean():.0%}" if model.bounded else "—"
         print(
             f"{name:19s} {what:28s} {T:5.3g} {len(run.events):6d} {saturated:>9s} {diff:>12s} "

@@ -110,9 +110,7 @@ def _block_ids() -> list[tuple[Path, int]]:
 
 def _run(code: str, cwd: Path) -> list[str]:
     env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]))
-    result = subprocess.run(
-        [sys.executable, "-c", code], cwd=cwd, env=env, capture_output=True, text=True, timeout=300
-    )
+    result = subprocess.run([sys.executable, "-c", code], cwd=cwd, env=env, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr[-3000:]
     return [line for line in result.stdout.splitlines() if line.strip()]
 
@@ -213,7 +211,9 @@ def _check_command(text: str) -> None:
 
 def _literals(path: Path) -> list[float]:
     """Every number written in a file (code or docstring), underscores allowed."""
-    return [float(m.group(0).replace("_", "")) for m in re.finditer(r"\d[\d_]*(?:\.\d+)?(?:e[-+]?\d+)?", path.read_text())]
+    return [
+        float(m.group(0).replace("_", "")) for m in re.finditer(r"\d[\d_]*(?:\.\d+)?(?:e[-+]?\d+)?", path.read_text())
+    ]
 
 
 @pytest.mark.parametrize("path", DOCS, ids=lambda p: p.name)
