@@ -1,4 +1,4 @@
-"""The stability study (DESIGN §6.6, issue 5 item 3): each case's verdict and its key figures.
+"""The stability study (docs/theory.md §6.6, issue 5 item 3): each case's verdict and its key figures.
 
 The study runs once per module (``run(quick=True)``, about ten seconds). Cases whose verdict is ✗
 (the library does something wrong there) have a test of what is *right*, marked
