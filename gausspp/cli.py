@@ -374,9 +374,15 @@ def _demo_general() -> None:
     from .gauss_qp import default_backend
     from .simulate import simulate
 
-    print(f"\nBeyond closed forms — the general Gauss QP ({default_backend()} and osqp), DOP853 rtol 1e-11:\n")
+    first = default_backend()  # daqp when installed, else OSQP: then there is no second backend to compare with
+    second = None if first == "osqp" else "osqp"
+    versus = f"{first} vs {second}" if second else "backends"
+    compared = (
+        f"{first}, compared with {second}" if second else f"{first} only; daqp not installed — `pip install daqp`"
+    )
+    print(f"\nBeyond closed forms — the general Gauss QP ({compared}), DOP853 rtol 1e-11:\n")
     header = (
-        f"{'scene':19s} {'what':28s} {'T':>5s} {'events':>6s} {'saturated':>9s} {'daqp vs osqp':>12s} "
+        f"{'scene':19s} {'what':28s} {'T':>5s} {'events':>6s} {'saturated':>9s} {versus:>12s} "
         f"{'|Φ|,|g| max':>11s} {'energy bal.':>11s} {'vs exact':>9s} {'run ms':>7s}"
     )
     print(header)
@@ -392,12 +398,14 @@ def _demo_general() -> None:
         elif model.bounded:
             kwargs["stabilize"] = "baumgarte"
         start = time.perf_counter()
-        first = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{default_backend()}", **kwargs)
+        run = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{first}", **kwargs)
         run_ms = (time.perf_counter() - start) * 1e3
-        other = simulate(model, scene.q0, scene.v0, T, backend="qpsolvers:osqp", **kwargs)
-        on_grid = [np.flatnonzero(np.isin(traj.t, grid) & np.r_[np.diff(traj.t) > 0, True]) for traj in (first, other)]
-        diff = float(np.abs(first.q[on_grid[0]] - other.q[on_grid[1]]).max())
-        redundant = first.solver.startswith("gauss-qp") and not (model.bounded or model.contacts or model.m > model.k)
+        diff = "—"
+        if second:
+            other = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{second}", **kwargs)
+            on_grid = [np.flatnonzero(np.isin(tr.t, grid) & np.r_[np.diff(tr.t) > 0, True]) for tr in (run, other)]
+            diff = f"{float(np.abs(run.q[on_grid[0]] - other.q[on_grid[1]]).max()):.1e}"
+        redundant = run.solver.startswith("gauss-qp") and not (model.bounded or model.contacts or model.m > model.k)
         features = [
             f"{len(model.contacts)} contact(s)" if model.contacts else "",
             "bounded" if model.bounded else "",
@@ -405,22 +413,24 @@ def _demo_general() -> None:
             "redundant rows" if redundant else "",
         ]
         what = ", ".join(f for f in features if f)
-        balance = np.abs(first.energy_balance())
+        balance = np.abs(run.energy_balance())
         energy = f"{np.nanmax(balance):.1e}" if np.isfinite(balance).any() else "—"
         exact = "—"
         if scene.exact is not None:
-            exact = (
-                f"{max(float(np.abs(scene.exact(t)[0] - q).max()) for t, q in zip(first.t, first.q, strict=True)):.1e}"
-            )
-        saturated = f"{first.saturated.any(axis=1).mean():.0%}" if model.bounded else "—"
+            exact = f"{max(float(np.abs(scene.exact(t)[0] - q).max()) for t, q in zip(run.t, run.q, strict=True)):.1e}"
+        saturated = f"{run.saturated.any(axis=1).mean():.0%}" if model.bounded else "—"
         print(
-            f"{name:19s} {what:28s} {T:5.3g} {len(first.events):6d} {saturated:>9s} {diff:12.1e} "
-            f"{first.max_residual():11.1e} {energy:>11s} {exact:>9s} {run_ms:7.0f}"
+            f"{name:19s} {what:28s} {T:5.3g} {len(run.events):6d} {saturated:>9s} {diff:>12s} "
+            f"{run.max_residual():11.1e} {energy:>11s} {exact:>9s} {run_ms:7.0f}"
         )
     print(
         "\nevents: impacts, lift-offs and touch-downs located by the integrator; saturated: share of samples with an "
-        "actuator at its bound;\ndaqp vs osqp: largest difference of q on a common grid of 201 times."
+        "actuator at its bound;"
     )
+    if second:
+        print(f"{versus}: largest difference of q on a common grid of 201 times (the two qpsolvers backends run here).")
+    else:
+        print(f"only {first} was run: daqp not installed — `pip install daqp` to compare two QP backends.")
 
 
 def _print_study(rows: list[Any]) -> None:
@@ -988,6 +998,31 @@ examples:
   gausspp verify skate --check-param realization=vakonomic --expect not-motion"""
 
 
+_DEMO = """\
+One step of the two-mass and rigid-body scenes by the direct formula and by
+the Gauss QP, with the time per step; then every scene simulated with both
+step solvers, their agreement along the run, the constraint residual, the
+energy balance and the verdict of the integral principle (23); then the scenes
+only the general Gauss QP can solve (contacts, saturation, extra actuators,
+redundant rows); and four teaching figures in --out.
+
+example:
+  gausspp demo --out demo-figures"""
+
+_REPORT = """\
+Error against run time: every scene (or --scenes) with every integration
+method and step solver, scored against the scene's exact solution or a finer
+reference by another method; wall time is the minimum of --repeats runs.
+Prints the table and the fastest run per scene reaching 1e-10, and writes
+CSV/JSON and one work-precision plot per scene to --out. With --stability,
+runs the stability study instead (stiff chain, mass ratios, small margins,
+long horizon, redundant rows, data off the constraint, crane at the vertical
+rope), with a verdict per case; exit 1 if a verdict fails.
+
+examples:
+  gausspp report --scenes pendulum
+  gausspp report --stability"""
+
 _SWEEP = """\
 Run a sweep on local worker processes. With --out every result is appended as
 it arrives, and a second run with the same --out resumes: tasks already
@@ -1010,7 +1045,13 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks")
     parser.add_argument("--quiet", action="store_true", help="no progress indication on stderr")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    dem = sub.add_parser("demo", parents=[common], help="the main job: every scene by QP and direct, a table, figures")
+    dem = sub.add_parser(
+        "demo",
+        parents=[common],
+        help="the main job: every scene by QP and direct, a table, figures",
+        description=_DEMO,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     dem.add_argument("--out", default="demo-figures", help="directory for the figures (default: demo-figures/)")
     dem.set_defaults(func=demo)
     sc = sub.add_parser(
@@ -1069,7 +1110,14 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("--expect", choices=("motion", "not-motion"), help="exit with 1 if the verdict is not this")
     v.set_defaults(func=verify)
 
-    rep = sub.add_parser("report", parents=[common], help="error against run time for every scene, method and solver")
+    rep = sub.add_parser(
+        "report",
+        parents=[common],
+        help="error against run time for every scene, method and solver",
+        description=_REPORT,
+        epilog=_EXIT_CODES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
     rep.add_argument("--stability", action="store_true", help="run the stability study instead")
     rep.add_argument("--full", action="store_true", help="finer sweeps (and full-size stability cases)")
     rep.add_argument("--scenes", nargs="*", metavar="SCENE", choices=scenes.names(), help="only these scenes")

@@ -1,4 +1,4 @@
-"""Drift control (DESIGN §5): Baumgarte terms and projection onto the constraint.
+"""Drift control (docs/theory.md §5): Baumgarte terms and projection onto the constraint.
 
 The step keeps only the differentiated constraint ``J q̈ = φ``, so ``Φ`` (and ``g``) drift
 by the integration error. Two remedies, off by default so that exact comparisons see the

@@ -2,7 +2,7 @@
 
 A front end turns a user's description into symbolic casadi expressions, once:
 
-* ``A(q, t)`` — the kinetic-energy matrix ``∂²T/∂v²`` (DESIGN §1),
+* ``A(q, t)`` — the kinetic-energy matrix ``∂²T/∂v²`` (docs/theory.md §1),
 * ``f(q, v, t) = F − h`` — applied forces minus the velocity terms of ``[T] = A ẍ + h``,
 * ``q̇ = K(q, v, t)`` — the kinematics (identity for generalized coordinates,
   quaternion kinematics for a rigid body in body angular velocity),
@@ -82,7 +82,7 @@ class Mechanism(ABC):
         """``[N_i]`` for each component of ``N`` (affine in ``v``), as rows of a ``(k, nv)`` SX.
 
         ``[f] = d/dt ∂f/∂v − ∂f/∂q`` in generalized coordinates; because ``N`` is affine in
-        ``v`` the result contains no acceleration (DESIGN §2).
+        ``v`` the result contains no acceleration (docs/theory.md §2).
         """
 
     def lagrange_derivative(self, N: Expr) -> Callable[[Any, Any, float], np.ndarray]:

@@ -1,4 +1,4 @@
-"""The integral principle (paper §6, inequality (23); DESIGN §4): is a path a motion of a model?
+"""The integral principle (paper §6, inequality (23); docs/theory.md §4): is a path a motion of a model?
 
 For a path ``x(t)`` on the constraint put ``R(t) = [T] − F = A ẍ − f`` along it. The path is a
 motion of the model iff, for every variation ``η`` vanishing at ``t₁, t₂`` and satisfying the

@@ -1,6 +1,6 @@
 """Integration methods: a registry of names with their declared order and lane.
 
-Three lanes run the same right-hand side (the step of DESIGN §2–3 plus kinematics):
+Three lanes run the same right-hand side (the step of docs/theory.md §2–3 plus kinematics):
 
 * ``python`` — fixed-step schemes stepped from Python, one compiled step call per stage;
 * ``scipy`` — scipy's adaptive and stiff ``OdeSolver`` classes (RK45, DOP853, Radau, BDF), the

@@ -1,6 +1,6 @@
 """A step's data as numbers, and solving it without a model.
 
-:class:`StepProblem` holds ``A, f, r₀, J, φ, D`` of DESIGN §2 at one instant. It is what
+:class:`StepProblem` holds ``A, f, r₀, J, φ, D`` of docs/theory.md §2 at one instant. It is what
 :meth:`Model.step_data` returns and what :func:`solve` takes, so users (and the property
 tests) can pose a step from matrices they already have. :func:`solve` compiles one kernel
 per shape and solver, the same code a model's step runs.

@@ -1,4 +1,4 @@
-"""Realizations: how a constraint is kept, and so which motion it produces (DESIGN §2).
+"""Realizations: how a constraint is kept, and so which motion it produces (docs/theory.md §2).
 
 Every realization gives the per-step reaction the same shape::
 

@@ -9,7 +9,7 @@ import numpy as np
 
 @dataclass(frozen=True)
 class StepResult:
-    """Everything one step computes (DESIGN §2–3).
+    """Everything one step computes (docs/theory.md §2–3).
 
     Attributes
     ----------

@@ -1,4 +1,4 @@
-"""``simulate``: integrate a model from initial data (DESIGN §5).
+"""``simulate``: integrate a model from initial data (docs/theory.md §5).
 
 What is integrated (the model's step as ``y' = F(t, y)`` with ``y = (q, v, λ, W_R, W_F)``),
 how (a :mod:`~gausspp.methods` method) and what is recorded (a :class:`~gausspp.Trajectory`

@@ -1,4 +1,4 @@
-"""The Trajectory record: what a simulation computed, sample by sample (DESIGN §5)."""
+"""The Trajectory record: what a simulation computed, sample by sample (docs/theory.md §5)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Front ends (DESIGN §1): A and h by autodiff, the Lagrange derivative [N], Euler–Poincaré."""
+"""Front ends (docs/theory.md §1): A and h by autodiff, the Lagrange derivative [N], Euler–Poincaré."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The generalized Gauss principle on random systems (DESIGN §3), QP ≡ direct.
+"""The generalized Gauss principle on random systems (docs/theory.md §3), QP ≡ direct.
 
 Random SPD A (condition number up to 1e6), random J (k×n), D (n×k) and r₀, n ≤ 12, k ≤ 4.
 Draws whose realizability margin is below 1e-3 are set aside (``assume``): there the

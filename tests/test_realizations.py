@@ -1,4 +1,4 @@
-"""DESIGN §2 table: each realization's reaction form, λ as state only where needed."""
+"""docs/theory.md §2 table: each realization's reaction form, λ as state only where needed."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""DESIGN §6.2: rigid body with a servo torque; realizability is (I⁻¹n, l) ≠ 0, not n ⟂̸ l."""
+"""docs/theory.md §6.2: rigid body with a servo torque; realizability is (I⁻¹n, l) ≠ 0, not n ⟂̸ l."""
 
 from __future__ import annotations
 

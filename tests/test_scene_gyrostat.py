@@ -1,4 +1,4 @@
-"""DESIGN §6.3 (gyrostat, flywheel realization) and §6.2 with n = l (Suslov's problem).
+"""docs/theory.md §6.3 (gyrostat, flywheel realization) and §6.2 with n = l (Suslov's problem).
 
 * the gyrostat obeys d/dt(Iω + λn) + ω × (Iω + λn) = 0 with (ω, l) = 0 kept by λ̇;
 * it is the same motion as the body with the rotor angle as a coordinate and the motor torque

@@ -1,4 +1,4 @@
-"""DESIGN §6: the mixed-realization scenes (19)/(22), the stiff chain (§6.6) and the pendulum (§6.7)."""
+"""docs/theory.md §6: the mixed-realization scenes (19)/(22), the stiff chain (§6.6) and the pendulum (§6.7)."""
 
 from __future__ import annotations
 

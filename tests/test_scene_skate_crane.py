@@ -1,4 +1,4 @@
-"""DESIGN §6.4 (skate: one constraint, two laws) and §6.5 (crane: a servo-constraint whose margin ∝ sin²θ)."""
+"""docs/theory.md §6.4 (skate: one constraint, two laws) and §6.5 (crane: a servo-constraint whose margin ∝ sin²θ)."""
 
 from __future__ import annotations
 

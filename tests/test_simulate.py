@@ -1,4 +1,4 @@
-"""simulate (DESIGN §5): convergence orders, exact motions, λ state, drift control, failures."""
+"""simulate (docs/theory.md §5): convergence orders, exact motions, λ state, drift control, failures."""
 
 from __future__ import annotations
 

@@ -325,21 +325,3 @@ def test_cli_sweep_work_precision_writes_the_report_and_resumes(
     assert main(["sweep", "realizability", "--scenes", "pendulum"]) == 2
     assert main(["sweep", "work-precision", "--solvers", "nope", "--out", str(tmp_path)]) == 2
     assert "--solvers: 'nope' is unknown" in capsys.readouterr().err
-
-
-def test_readme_sweeps_snippet_runs(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    import re
-
-    section = (ROOT / "README.md").read_text().split("## Sweeps", 1)[1].split("\n## ", 1)[0]
-    code = re.search(r"```python\n(.*?)```", section, re.S)
-    assert code is not None
-    monkeypatch.chdir(tmp_path)
-    namespace: dict[str, Any] = {}
-    exec(compile(code.group(1), "README.md", "exec"), namespace)
-    assert namespace["res"].ok and len(namespace["res"]) == 72 * 35
-    assert len(_records(tmp_path / "margins.jsonl")) == 72 * 35
-    swings = SweepResult.from_npz(tmp_path / "swings.npz")
-    assert swings.ok and (tmp_path / "swings.jsonl").exists()
-    # the pin pulls hardest at the bottom of the swing: m g + m L ω_b², ω_b² = 2 m g L (sin φ0 + 1)/(Ic + m L²)
-    bottom = 9.81 + 2 * 9.81 * (np.sin([0.0, 0.5, 1.0]) + 1) / 1.01
-    assert np.allclose(swings.column("max_reaction"), bottom, rtol=1e-5)

@@ -1,4 +1,4 @@
-"""DESIGN §6.1: one constraint, two realizations, two motions — and every backend agrees."""
+"""docs/theory.md §6.1: one constraint, two realizations, two motions — and every backend agrees."""
 
 from __future__ import annotations
 

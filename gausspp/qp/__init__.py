@@ -1,6 +1,6 @@
 """QP backends behind one registry: ``get(name)``, ``names()``, ``DEFAULT``.
 
-Two routes to the same Gauss QP (DESIGN §3):
+Two routes to the same Gauss QP (docs/theory.md §3):
 
 * ``casadi:<plugin>`` — compiled into the model's casadi graph (a step is one C call);
 * ``qpsolvers:<solver>`` — any solver qpsolvers finds installed, called from Python.

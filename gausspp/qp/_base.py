@@ -1,6 +1,6 @@
 """The contract of a QP backend.
 
-Every backend solves the same reaction-space Gauss QP (DESIGN §3)::
+Every backend solves the same reaction-space Gauss QP (docs/theory.md §3)::
 
     minimize   ½ uᵀ H u          (H = Dᵀ A⁻¹ D, so this is ½ Z)
     subject to S u = rhs         (S = J A⁻¹ D, rhs = φ − J a₀)

@@ -1,4 +1,4 @@
-"""Reference problems (DESIGN §6): ``get(name, **params)`` builds one, ``names()`` lists them.
+"""Reference problems (docs/theory.md §6): ``get(name, **params)`` builds one, ``names()`` lists them.
 
 Each scene is a module with a ``build(**params) -> Scene`` function, imported only when asked
 for: each scene builds only what it needs (no λ state, QP inequality rows or NLP unless asked).

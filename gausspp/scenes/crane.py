@@ -1,4 +1,4 @@
-"""A crane whose trolley force makes the payload follow a prescribed horizontal motion (DESIGN §6.5).
+"""A crane whose trolley force makes the payload follow a prescribed horizontal motion (docs/theory.md §6.5).
 
 A trolley of mass ``M0`` at horizontal position ``x`` carries a payload ``m`` on a rope of length
 ``L`` at angle ``θ`` from the vertical: the payload is at ``(x + L sin θ, −L cos θ)``. Gravity

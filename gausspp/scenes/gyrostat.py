@@ -1,4 +1,4 @@
-"""A rigid body kept on ``(ω, l) = 0`` by a flywheel: the gyrostat (paper §4, DESIGN §6.3).
+"""A rigid body kept on ``(ω, l) = 0`` by a flywheel: the gyrostat (paper §4, docs/theory.md §6.3).
 
 A symmetric rotor spins about the body axis ``n``; its axial angular momentum ``λ`` is a state
 (initial value required). The kinetic energy of the carrier is changed to

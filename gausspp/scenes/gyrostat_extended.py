@@ -1,4 +1,4 @@
-"""The gyrostat with its rotor angle as a coordinate and a motor torque as Béghin servo (DESIGN §6.3).
+"""The gyrostat with its rotor angle as a coordinate and a motor torque as Béghin servo (docs/theory.md §6.3).
 
 The same body as the scene ``"gyrostat"``, modelled without the flywheel realization: the
 rotor's angle ``θ`` relative to the carrier is an extra coordinate, and the motor torque ``τ``

@@ -1,4 +1,4 @@
-"""Mixed realizations (paper (19)–(22), DESIGN §2): inertia and a controlled force together.
+"""Mixed realizations (paper (19)–(22), docs/theory.md §2): inertia and a controlled force together.
 
 A particle of mass ``m`` in the plane, ``q = (x, y)``, on anisotropic springs
 ``V = ½(kx x² + ky y²)``, kept on the track ``Φ = ẏ − c ẋ = 0`` (``J = (−c, 1)``). The

@@ -1,4 +1,4 @@
-"""A pendulum made by constraints (DESIGN §6.7), for comparison with other simulators.
+"""A pendulum made by constraints (docs/theory.md §6.7), for comparison with other simulators.
 
 A planar rigid body with coordinates ``q = (x, z, φ)``: its centre of mass ``(x, z)`` and its
 angle ``φ``; mass ``m``, central moment of inertia ``Ic``, gravity ``g`` along ``−z``:

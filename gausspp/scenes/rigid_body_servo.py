@@ -1,4 +1,4 @@
-"""A rigid body about a fixed point kept by a servo torque (paper §2, DESIGN §6.2).
+"""A rigid body about a fixed point kept by a servo torque (paper §2, docs/theory.md §6.2).
 
 Constraint ``(ω, l) = 0`` (body axes), kept by a torque ``λ n`` along the body axis ``n``
 (Béghin realization, ``M = nᵀ``). Realizable iff ``(I⁻¹ n, l) ≠ 0`` — this is ``n ⟂̸ l`` only

@@ -1,4 +1,4 @@
-"""A skate (knife edge) in the plane (DESIGN §6.4): one constraint, two laws of motion.
+"""A skate (knife edge) in the plane (docs/theory.md §6.4): one constraint, two laws of motion.
 
 Coordinates ``q = (x, y, θ)``: the contact point and the blade's heading. Kinetic energy
 ``T = ½ m (ẋ² + ẏ²) + ½ J θ̇²``; the blade cannot slide sideways:

@@ -1,4 +1,4 @@
-"""A stiff spring chain with a constraint (DESIGN §6.6): a test for stiff integrators.
+"""A stiff spring chain with a constraint (docs/theory.md §6.6): a test for stiff integrators.
 
 ``n`` masses on a line, ``q`` their displacements. Spring 0 joins mass 0 to a wall, spring ``i``
 (``1 ≤ i < n``) joins masses ``i − 1`` and ``i``; soft springs have stiffness ``k``, the springs
@@ -133,7 +133,7 @@ def build(
         exact=exact,
         description=(
             f"{n} masses on springs, stiffness ratio {stiffness_ratio:g}, mass ratio {mass_ratio:g}, "
-            f"lever constraint ({realization}); DESIGN §6.6"
+            f"lever constraint ({realization}); docs/theory.md §6.6"
         ),
         params=dict(
             n=n,

@@ -1,4 +1,4 @@
-"""Two masses on a line (paper §1, DESIGN §6.1): one constraint, two realizations, two motions.
+"""Two masses on a line (paper §1, docs/theory.md §6.1): one constraint, two realizations, two motions.
 
 Masses ``m1, m2`` on a line, a force ``F`` on ``m2`` (and, if ``k > 0``, a spring ``−k x₂`` to a
 wall, which makes the exact motion a sinusoid), the constraint ``ẋ₂ − ẋ₁ = 0``.

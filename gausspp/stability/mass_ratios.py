@@ -50,7 +50,7 @@ def _mul(X: Matrix, Y: Matrix) -> Matrix:
 
 
 def exact_acceleration(p: StepProblem) -> np.ndarray:
-    """The step's acceleration computed exactly (rational arithmetic) from its float data (DESIGN §2).
+    """The step's acceleration computed exactly (rational arithmetic) from its float data (docs/theory.md §2).
 
     ``a = a₀ + A⁻¹D u`` with ``a₀ = A⁻¹(f + r₀)`` and ``J A⁻¹D u = φ − J a₀``.
     """
