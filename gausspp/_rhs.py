@@ -48,7 +48,7 @@ class RightHandSide:
             raise evaluation_failed(exc, where, margin_error=m.margin_error) from None
         out = self.kernel.result()
         ok = out["pivot"][0] > 0 and np.isfinite(out["checksum"][0]) and out["qp_primal"][0] <= QP_TOLERANCE
-        if ok:  # the realizability margin, at every evaluation (DESIGN §2): σ_min of the normalized S
+        if ok:  # the realizability margin, at every evaluation (docs/theory.md §2): σ_min of the normalized S
             ok = step_margin(out["S_norm"], self.model.k, self.model.m) >= self.model.margin_error
         if not ok:  # diagnose: raises the project error that explains the failure
             size = float(np.max(np.abs(y)))

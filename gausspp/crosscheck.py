@@ -3,7 +3,7 @@
 The model's two routes (the direct multiplier formula and the compiled QP) share one reduction to
 reaction space (``Ŝ``, the whitened reaction, :mod:`gausspp.step`) and, by default, one refinement
 step; comparing them checks little. The reference here shares nothing with them. It is the QP of
-the paper (§3) and DESIGN §3, assembled from the step's data ``A, a₀, J, φ, D`` alone::
+the paper (§3) and docs/theory.md §3, assembled from the step's data ``A, a₀, J, φ, D`` alone::
 
     minimize   ½ (a − a₀)ᵀ A (a − a₀)                 over the accelerations a ∈ Rⁿ
     subject to J a = φ                                 (the constraint, eq. (11))

@@ -1,4 +1,4 @@
-"""The direct multiplier solution (DESIGN §2): ``u = S⁻¹(φ − J a₀)``, ``q̈ = a₀ + A⁻¹ D u``.
+"""The direct multiplier solution (docs/theory.md §2): ``u = S⁻¹(φ − J a₀)``, ``q̈ = a₀ + A⁻¹ D u``.
 
 The cross-check for every QP answer. It exists only when ``S = J A⁻¹ D`` is square and
 nonsingular, i.e. as many reaction directions as constraint components and the

@@ -2,7 +2,7 @@
 
 The compiled step (:mod:`gausspp.step`) solves the square, equality-only case. This module
 solves the *general* one at a single instant, numerically, with any QP backend qpsolvers
-finds (DESIGN §3, last paragraph)::
+finds (docs/theory.md §3, last paragraph)::
 
     a = a₀ + A⁻¹ D u,    Z(u) = (A(a − a₀), a − a₀) = ‖W u‖²,   W = R⁻ᵀ D,  RᵀR = A
 

@@ -1,6 +1,6 @@
 """A mechanism with its constraints and their realizations: the per-step problem, compiled.
 
-``Model`` assembles DESIGN §2's step ``A q̈ = F − h + r₀ + D u``, ``J q̈ = φ`` from a front
+``Model`` assembles docs/theory.md §2's step ``A q̈ = F − h + r₀ + D u``, ``J q̈ = φ`` from a front
 end and constraints (stacking rows of ``J`` and columns of ``D``), compiles one kernel per
 solver on first use, and keeps it: a step is then one casadi call. The model is immutable
 after construction; kernels (with their bound buffers) are a per-model cache.
@@ -171,7 +171,7 @@ class Model:
             if e.g is not None
             for i in range(at, at + k)
         ]
-        # Baumgarte terms (DESIGN §5): J q̈ = φ − α Φ − β g, with (α, β) an input (zero: the exact step)
+        # Baumgarte terms (docs/theory.md §5): J q̈ = φ − α Φ − β g, with (α, β) an input (zero: the exact step)
         self.stab = ca.SX.sym("stab", 2)
         self._expressions = StepExpressions(
             A=mech.A,

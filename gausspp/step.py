@@ -1,4 +1,4 @@
-"""The per-step problem and its reduction to reaction space (DESIGN §2–3).
+"""The per-step problem and its reduction to reaction space (docs/theory.md §2–3).
 
 At one instant the realizations give::
 
@@ -13,7 +13,7 @@ Both solvers work on this reduction: the direct one solves ``S u = φ − J a₀
 minimizes ``½ uᵀ H u`` subject to it (the generalized Gauss principle, paper §3).
 
 **Realizability margin.** The smallest singular value of ``S`` with each row of ``J`` and each
-column of ``D`` normalized in the kinetic metric ``A⁻¹`` (DESIGN §2's σ_min(S)/(‖J‖·‖A⁻¹D‖), per
+column of ``D`` normalized in the kinetic metric ``A⁻¹`` (docs/theory.md §2's σ_min(S)/(‖J‖·‖A⁻¹D‖), per
 row and column): for one constraint the cosine of the angle between its normal and its
 reaction direction, 1 for an ideal constraint, and 0 exactly when ``S`` is singular — the
 realization cannot keep the constraint (12)/(16), or the constraint rows are redundant. It is
