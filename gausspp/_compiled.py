@@ -14,11 +14,11 @@ import numpy as np
 
 from . import methods as _methods
 from .drift import Stabilization, projection_function
-from .errors import GaussppError, InputError, IntegrationError, NonFiniteError
+from .errors import GaussppError, InputError, IntegrationError, NonFiniteError, RealizabilityError
 from .kernel import CompiledKernel
 from .model import Model
 from .qp.casadi_conic import stdout_silenced
-from .step import OUTPUTS
+from .step import OUTPUTS, reduce
 
 #: CVODES gives up after this many internal steps (≈1 s on a small model) instead of stalling.
 MAX_CVODES_STEPS = 100_000
@@ -78,13 +78,56 @@ def _rk_step(model: Model, F: ca.Function, tableau: _methods.Tableau, stab: Stab
     if stab.project:
         q1, v1 = projection_function(model)(t + h, q1, v1, lam1)
     y1 = ca.vertcat(q1, v1, lam1, y1[nq + nv + nl :])
-    step = ca.Function("rk_step", [y, t, h, s], [y1])
+    step = ca.Function("rk_step", [y, t, h, s], [y1, margin_bound(model)(t, y)])
     try:
         flat = step.expand()  # direct path: one flat SX instruction list for the whole step ...
     except RuntimeError:
         return step  # a conic node cannot be expanded; the QP stays a call in the MX graph
     args = flat.sx_in()
     return ca.Function("rk_step", args, ca.cse(flat.call(args)))  # ... without repeated subexpressions
+
+
+#: Above this many constraint rows the compiled lane checks the margin at the recorded samples only (the bound
+#: below needs a symbolic k × k inverse).
+MARGIN_BOUND_ROWS = 8
+
+
+def margin_bound(model: Model) -> ca.Function:
+    """``(t, y) ↦ b`` with ``b ≤ σ_min(S_norm) ≤ √k · b``, the realizability margin within a factor √k.
+
+    ``b = 1 / √trace((S Sᵀ)⁻¹)``: ``trace((S Sᵀ)⁻¹) = Σ 1/σᵢ²`` lies between ``1/σ_min²`` and ``k/σ_min²``.
+    For one row it is the row's length, the margin itself. ``+inf`` when there are no rows or too many
+    (:data:`MARGIN_BOUND_ROWS`); 0 when ``S`` has more rows than columns.
+    """
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    t, y = ca.SX.sym("t"), ca.SX.sym("y", nq + nv + nl + 2)
+    k, m = model.k, model.m
+    if k == 0 or k > MARGIN_BOUND_ROWS:
+        bound = ca.SX(np.inf)
+    elif k > m:
+        bound = ca.SX(0.0)
+    else:
+        S_of = ca.Function("S_norm", model._inputs, [reduce(model._expressions).S_norm])
+        S = S_of(t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], ca.SX.zeros(2))
+        G = S @ S.T
+        bound = 1 / ca.sqrt(ca.trace(ca.solve(G, ca.SX.eye(k)))) if k > 1 else ca.sqrt(G[0, 0])
+    return ca.Function("margin_bound", [t, y], [bound])
+
+
+def _margin_failure(model: Model, times: np.ndarray, bounds: np.ndarray) -> tuple[int, Exception] | None:
+    """The first step whose start has a margin certainly below ``margin_error`` (or not finite), as an error."""
+    certain = ~(bounds * np.sqrt(max(model.k, 1)) >= model.margin_error)  # NaN counts: S singular there
+    if not certain.any():
+        return None
+    i = int(np.argmax(certain))
+    return i, RealizabilityError(
+        f"the realizability margin falls below margin_error={model.margin_error:g} at t={times[i]:.6g} (at most "
+        f"{bounds[i] * np.sqrt(model.k):.3g}; constraints {', '.join(repr(n) for n in model.names)}): the "
+        "realization cannot keep the constraint there; the run stops",
+        t=float(times[i]),
+        constraint=", ".join(model.names),
+        margin=float(bounds[i]),
+    )
 
 
 def _normalize(model: Model, q: ca.MX) -> ca.MX:
@@ -116,12 +159,17 @@ def integrate_compiled(
     step, run = _compiled_run(model, solver, backend, meth, stab, n_steps)
     h, s = np.diff(times)[None, :], np.array(stab.stab)
     try:
-        Y = np.vstack([y0[None, :], np.array(run(y0, times[:-1][None, :], h, s)).T])
+        Ys, bounds = run(y0, times[:-1][None, :], h, s)
+        Y = np.vstack([y0[None, :], np.array(Ys).T])
+        bounds = np.array(bounds).ravel()
     except RuntimeError:  # a QP plugin refused non-finite data somewhere: redo step by step to keep the prefix
-        Y = _step_by_step(step, y0, times, s)
+        Y, bounds = _step_by_step(step, y0, times, s)
     failure: Exception | None = None
+    low = _margin_failure(model, times[: bounds.size], bounds)
+    if low is not None:  # the step from a state with a vanishing margin is not kept, nor anything after it
+        Y, times, failure = Y[: low[0] + 1], times[: low[0] + 1], low[1]
     finite = np.isfinite(Y).all(axis=1)
-    if Y.shape[0] < times.size or not finite.all():
+    if failure is None and (Y.shape[0] < times.size or not finite.all()):
         first = int(np.argmin(finite)) if not finite.all() else Y.shape[0]
         Y, times = Y[:first], times[:first]
         failure = _diagnose(model, solver, backend, times[-1], Y[-1], times[-1] + dt)
@@ -149,17 +197,20 @@ def _compiled_run(
     return step, runs[n_steps]
 
 
-def _step_by_step(step: ca.Function, y0: np.ndarray, times: np.ndarray, stab: np.ndarray) -> np.ndarray:
-    ys = [y0]
+def _step_by_step(
+    step: ca.Function, y0: np.ndarray, times: np.ndarray, stab: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    ys, bounds = [y0], []
     for t, t_next in zip(times[:-1], times[1:], strict=True):
         try:
-            y = np.array(step(ys[-1], t, t_next - t, stab)).ravel()
+            y, bound = step(ys[-1], t, t_next - t, stab)
         except RuntimeError:
             break
-        ys.append(y)
-        if not np.isfinite(y).all():
+        ys.append(np.array(y).ravel())
+        bounds.append(float(bound))
+        if not np.isfinite(ys[-1]).all():
             break
-    return np.array(ys)
+    return np.array(ys), np.array(bounds)
 
 
 def _diagnose(model: Model, solver: str, backend: str | None, t: float, y: np.ndarray, t_next: float) -> Exception:

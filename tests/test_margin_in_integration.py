@@ -54,3 +54,34 @@ def test_the_same_model_runs_where_the_actuators_stay_independent() -> None:
     traj = gp.simulate(model, [0.0, 0.0], [1.0, 0.5], 0.5, method="rk4", dt=0.1, solver="direct")
     assert traj.success and np.min(traj.margin) > 0.1
     np.testing.assert_allclose(traj.v, np.tile([1.0, 0.5], (len(traj), 1)), atol=1e-12)
+
+
+def test_the_compiled_lane_checks_the_margin_at_every_step() -> None:
+    """rk4-compiled records only t = 0 and t = 2 too: the in-graph bound (within √k of σ_min) stops the run."""
+    model = _turning_actuators()
+    traj = gp.simulate(
+        model,
+        [0.0, 0.0],
+        [1.0, 0.5],
+        2.0,
+        method="rk4-compiled",
+        dt=0.01,
+        solver="direct",
+        record=np.array([0.0, 2.0]),
+        throw=False,
+    )
+    assert not traj.success and traj.message.startswith("RealizabilityError")
+    assert "margin_error=0.05" in traj.message and "servo" in traj.message
+
+
+def test_the_margin_bound_brackets_the_margin() -> None:
+    """b ≤ σ_min ≤ √k·b along the model's states (k = 2)."""
+    from gausspp._compiled import margin_bound
+
+    model = _turning_actuators()
+    bound = margin_bound(model)
+    for t in np.linspace(0.0, 2.0, 21):
+        y = np.array([0.0, 0.0, 1.0, 0.5, 0.0, 0.0])
+        b = float(bound(t, y))
+        sigma = np.linalg.svd(model.kernel("direct")(t, y[:2], y[2:4], np.zeros(0), np.zeros(2))["S_norm"])[1][-1]
+        assert b <= sigma * (1 + 1e-12) and sigma <= np.sqrt(2) * b * (1 + 1e-12)
