@@ -15,7 +15,6 @@ import io
 import json
 import os
 import sys
-import textwrap
 import threading
 import time
 import warnings
@@ -30,6 +29,7 @@ import numpy as np
 from . import methods, qp, scenes
 from .errors import GaussppError, UnknownNameError
 from .model import Model
+from .scenes._scene import kinds as parameter_kinds
 from .trajectory import Trajectory
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -122,33 +122,8 @@ def _warnings_as_lines() -> Iterator[None]:
 
 # -- scene parameters ------------------------------------------------------------------------------
 def _scene_parameters(name: str) -> dict[str, inspect.Parameter]:
-    """The keyword parameters of the scene's builder (those of the module's ``build`` behind a ``**params`` wrapper)."""
-    builder = scenes._builder(name)
-    sig, fixed = inspect.signature(builder), set()
-    if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
-        base = getattr(sys.modules[builder.__module__], "build", None)
-        if base is not None and base is not builder:
-            sig = inspect.signature(base)
-            try:  # keywords the wrapper passes itself (``build(law="rate", **params)``) are not the user's
-                tree = ast.parse(textwrap.dedent(inspect.getsource(builder)))
-                fixed = {kw.arg for kw in ast.walk(tree) if isinstance(kw, ast.keyword) and kw.arg}
-            except (OSError, TypeError, SyntaxError):
-                pass
-    return {
-        k: p
-        for k, p in sig.parameters.items()
-        if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY) and k not in fixed
-    }
-
-
-def _annotation(param: inspect.Parameter) -> set[str]:
-    """The parameter's type as a set of names (``"float | None"`` → {"float", "None"}); from the default if bare."""
-    ann = param.annotation
-    if ann is inspect.Parameter.empty:
-        default = param.default
-        return {type(default).__name__} if isinstance(default, (bool, int, float, str)) else set()
-    text = ann if isinstance(ann, str) else getattr(ann, "__name__", str(ann))
-    return {part.strip() for part in text.split("|")}
+    """The keyword parameters of the scene's builder (:func:`gausspp.scenes.parameters`)."""
+    return scenes.parameters(name)
 
 
 def _parse_value(option: str, key: str, text: str, param: inspect.Parameter) -> Any:
@@ -157,7 +132,7 @@ def _parse_value(option: str, key: str, text: str, param: inspect.Parameter) -> 
         value: Any = ast.literal_eval(text)
     except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
         value = text
-    kinds = _annotation(param)
+    kinds = parameter_kinds(param)
     if kinds == {"str"}:
         return value if isinstance(value, str) else text
     if kinds & {"float", "int"}:
@@ -744,7 +719,7 @@ def list_scenes(args: argparse.Namespace) -> int:
     print(f"{args.name}: {inspect.getdoc(builder)}\n\nparameters (gausspp run {args.name} --param KEY=VALUE):")
     for key, param in _scene_parameters(args.name).items():
         ann = param.annotation
-        kind = ann if isinstance(ann, str) else " | ".join(sorted(_annotation(param))) or "any"
+        kind = ann if isinstance(ann, str) else " | ".join(sorted(parameter_kinds(param))) or "any"
         print(f"  {key:16s} {kind:14s} default {param.default!r}")
     return EXIT_OK
 

@@ -29,7 +29,7 @@ from ..errors import InputError, ShapeError, UnknownNameError
 from ..frontends import Lagrangian
 from ..model import Model
 from ..realizations import Mixed
-from ._scene import Scene
+from ._scene import Scene, vector
 
 LAWS = ("proportional", "rate")
 
@@ -51,8 +51,8 @@ def build(
         raise UnknownNameError(f"mixed: law={law!r} is unknown; use one of {list(LAWS)}")
     if not m > 0:
         raise InputError(f"mixed: the mass must be positive, got m={m}")
-    direction = np.asarray(M, dtype=float).ravel()
-    if direction.shape != (2,) or not np.all(np.isfinite(direction)):
+    direction = vector("mixed", "M", M).ravel()
+    if direction.shape != (2,):
         raise ShapeError(f"mixed: M must be a finite 2-vector (the force direction), got {M!r}")
     body = Lagrangian(
         n=2,
