@@ -8,7 +8,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .errors import NonFiniteError, NotAffineError, ShapeError, SymbolicError
+from ._checks import array, short
+from .errors import NotAffineError, ShapeError, SymbolicError
 
 #: What to write instead when a user function cannot run on casadi symbols.
 CASADI_HINT = (
@@ -48,7 +49,7 @@ def as_expression(value: Any, shape: tuple[int | None, int | None], what: str) -
     try:
         expr = _to_sx(value)
     except (TypeError, ValueError, NotImplementedError, RuntimeError) as exc:  # casadi raises the last two
-        raise SymbolicError(f"{what} returned {_short(value)}: {_last_line(exc)}; {CASADI_HINT}") from None
+        raise SymbolicError(f"{what} returned {short(value)}: {_last_line(exc)}; {CASADI_HINT}") from None
     rows, cols = shape
     if rows == 1 and expr.size2() == 1 and (cols is None or expr.size1() == cols) and expr.size1() != 1:
         expr = expr.T
@@ -65,7 +66,7 @@ def as_expression(value: Any, shape: tuple[int | None, int | None], what: str) -
 def evaluate(fn: Callable[..., Any], args: Sequence[Any], shape: tuple[int | None, int | None], what: str) -> ca.SX:
     """Call a user callable on symbols and check its result's shape."""
     if not callable(fn):
-        raise SymbolicError(f"{what} must be a function, got {_short(fn)}")
+        raise SymbolicError(f"{what} must be a function, got {short(fn)}")
     try:
         value = fn(*args)
     except (TypeError, ValueError, IndexError, AttributeError, RuntimeError) as exc:  # casadi raises RuntimeError
@@ -80,12 +81,6 @@ def evaluate(fn: Callable[..., Any], args: Sequence[Any], shape: tuple[int | Non
             "need casadi's functions (casadi.sin, casadi.sqrt, ...) or numpy's, which accept them (np.sin)"
         )
     return expr
-
-
-def _short(value: Any, limit: int = 60) -> str:
-    """``repr(value)``, cut to ``limit`` characters."""
-    text = " ".join(repr(value).split())
-    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 def _last_line(exc: Exception) -> str:
@@ -113,11 +108,9 @@ def require_affine_in(expr: ca.SX, v: ca.SX, what: str) -> None:
         )
 
 
-def check_constant_matrix(name: str, value: Any, shape: tuple[int, int]) -> np.ndarray:
-    """A numeric matrix parameter: finite, of the given shape."""
-    arr = np.asarray(value, dtype=float)
+def check_constant_matrix(owner: str, name: str, value: Any, shape: tuple[int, int]) -> np.ndarray:
+    """A numeric matrix parameter ``name`` of ``owner`` (a class): real, finite, of the given shape."""
+    arr = array(owner, name, value)
     if arr.shape != shape:
-        raise ShapeError(f"{name} has shape {arr.shape}, expected {shape}")
-    if not np.all(np.isfinite(arr)):
-        raise NonFiniteError(f"{name} contains NaN or inf: {arr.tolist()}")
+        raise ShapeError(f"{owner}: {name} has shape {arr.shape}, expected {shape}")
     return arr

@@ -146,9 +146,9 @@ class Unilateral(Holonomic):
         try:
             e = float(restitution)
         except (TypeError, ValueError):
-            raise InputError(f"Unilateral {name!r}: restitution must be a number, got {restitution!r}") from None
+            raise InputError(f"{self._title}: restitution must be a number, got {restitution!r}") from None
         if not 0.0 <= e <= 1.0:
-            raise InputError(f"Unilateral {name!r}: restitution must lie in [0, 1], got {restitution!r}")
+            raise InputError(f"{self._title}: restitution must lie in [0, 1], got {restitution!r}")
         self.restitution = e
 
     def __repr__(self) -> str:

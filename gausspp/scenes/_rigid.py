@@ -6,13 +6,13 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import array
 from ..errors import InputError, ShapeError
-from ._scene import vector
 
 
 def unit_vector(scene: str, name: str, value: Any) -> np.ndarray:
     """``value`` as a unit 3-vector, or a clear error naming the scene and the parameter."""
-    vec = vector(scene, name, value).ravel()
+    vec = array(scene, name, value).ravel()
     if vec.shape != (3,):
         raise ShapeError(f"{scene}: {name} must have 3 components, got {vec.size}")
     norm = np.linalg.norm(vec)
@@ -23,7 +23,7 @@ def unit_vector(scene: str, name: str, value: Any) -> np.ndarray:
 
 def inertia_matrix(scene: str, inertia: Any) -> np.ndarray:
     """A 3-vector of principal moments or a 3×3 tensor, as a 3×3 array (checked by the front end)."""
-    arr = vector(scene, "inertia", inertia)
+    arr = array(scene, "inertia", inertia)
     if arr.shape == (3,):
         return np.diag(arr)
     if arr.shape != (3, 3):
@@ -33,7 +33,7 @@ def inertia_matrix(scene: str, inertia: Any) -> np.ndarray:
 
 def on_plane(scene: str, omega0: Any, l: np.ndarray) -> np.ndarray:
     """``omega0`` projected onto the plane ``(ω, l) = 0`` (``l`` a unit vector)."""
-    w0 = vector(scene, "omega0", omega0).ravel()
+    w0 = array(scene, "omega0", omega0).ravel()
     if w0.shape != (3,):
         raise ShapeError(f"{scene}: omega0 must have 3 components, got {w0.size}")
     return w0 - np.dot(w0, l) * l

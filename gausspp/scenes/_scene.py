@@ -13,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, NonFiniteError, ShapeError, UnknownNameError
+from .._checks import number
+from ..errors import InputError, UnknownNameError
 from ..model import Model
 
 
@@ -125,41 +126,3 @@ def _typed(scene: str, key: str, value: Any, kind: set[str], infinite_ok: bool) 
     if "bool" in kind and isinstance(value, (bool, np.bool_)):
         return bool(value)
     raise InputError(where)
-
-
-def number(where: str, value: Any, integer: bool = False, infinite_ok: bool = False) -> float | int:
-    """``value`` as one finite ``float`` (or ``int``; ``±inf`` too if ``infinite_ok``), else an error whose
-    message is ``where``."""
-    if isinstance(value, (str, bytes, bool, np.bool_, complex, np.complexfloating)):
-        raise InputError(where)
-    try:
-        shape = np.shape(value)
-    except ValueError:  # ragged nested lists
-        shape = ("ragged",)
-    if shape != ():
-        raise ShapeError(f"{where} (one value, not an array of shape {shape})")
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(where) from None
-    if np.isnan(x) or (np.isinf(x) and not (infinite_ok and not integer)):
-        raise NonFiniteError(where)
-    if integer:
-        if not x.is_integer():
-            raise InputError(where)
-        return int(x)
-    return x
-
-
-def vector(scene: str, name: str, value: Any) -> np.ndarray:
-    """A scene's vector or matrix parameter as a finite float array, or an error naming the scene and parameter."""
-    try:
-        raw = np.asarray(value)
-        if raw.dtype.kind not in "iuf":  # strings, None, complex, ragged lists
-            raise TypeError
-        arr = raw.astype(float)
-    except (TypeError, ValueError):
-        raise InputError(f"{scene}: {name} must be real numbers (a vector or a matrix), got {value!r}") from None
-    if not np.all(np.isfinite(arr)):
-        raise NonFiniteError(f"{scene}: {name} must be finite, got {value!r}")
-    return arr

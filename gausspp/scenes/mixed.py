@@ -24,12 +24,13 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import array
 from ..constraints import Constraint
 from ..errors import InputError, ShapeError, UnknownNameError
 from ..frontends import Lagrangian
 from ..model import Model
 from ..realizations import Mixed
-from ._scene import Scene, vector
+from ._scene import Scene
 
 LAWS = ("proportional", "rate")
 
@@ -51,7 +52,7 @@ def build(
         raise UnknownNameError(f"mixed: law={law!r} is unknown; use one of {list(LAWS)}")
     if not m > 0:
         raise InputError(f"mixed: the mass must be positive, got m={m}")
-    direction = vector("mixed", "M", M).ravel()
+    direction = array("mixed", "M", M).ravel()
     if direction.shape != (2,):
         raise ShapeError(f"mixed: M must be a finite 2-vector (the force direction), got {M!r}")
     body = Lagrangian(
