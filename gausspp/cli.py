@@ -27,7 +27,7 @@ from typing import IO, Any, NoReturn
 import numpy as np
 
 from . import methods, qp, scenes
-from .errors import GaussppError, UnknownNameError
+from .errors import GaussppError, LongRunWarning, UnknownNameError
 from .model import Model
 from .scenes._scene import kinds as parameter_kinds
 from .trajectory import Trajectory
@@ -106,18 +106,31 @@ class _Progress:
 
 @contextmanager
 def _warnings_as_lines() -> Iterator[None]:
-    """Show warnings raised inside as one line each on stderr (``gausspp: warning: ...``), once per message."""
-    with warnings.catch_warnings(record=True) as caught:
+    """Show warnings raised inside as one line each on stderr (``gausspp: warning: ...``), once per message:
+    a :class:`~gausspp.LongRunWarning` at once (it announces the wait), the others when the block ends."""
+    caught: list[tuple[type[Warning], str]] = []
+    seen: set[str] = set()
+
+    def show(category: type[Warning], message: object) -> None:
+        line = _one_line(message)
+        if line not in seen:
+            seen.add(line)
+            print(f"gausspp: warning: {category.__name__}: {line}", file=sys.stderr, flush=True)
+
+    def collect(message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
+        if issubclass(category, LongRunWarning):
+            show(category, message)
+        else:
+            caught.append((category, str(message)))
+
+    with warnings.catch_warnings():
         warnings.simplefilter("always")
+        warnings.showwarning = collect
         try:
             yield
         finally:
-            seen: set[str] = set()
-            for w in caught:
-                line = _one_line(w.message)
-                if line not in seen:
-                    seen.add(line)
-                    print(f"gausspp: warning: {w.category.__name__}: {line}", file=sys.stderr)
+            for category, message in caught:
+                show(category, message)
 
 
 # -- scene parameters ------------------------------------------------------------------------------
@@ -1096,10 +1109,48 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _unknown_option(parser: argparse.ArgumentParser, argv: Sequence[str]) -> tuple[argparse.ArgumentParser, str] | None:
+    """The first option in ``argv`` that neither ``parser`` nor the subcommand named in ``argv`` knows, with the
+    parser it was given to. argparse reports a missing argument (``COMMAND``, ``SCENE``) before an unknown option,
+    which misleads when the option is the mistake (``gausspp --bogus-flag``)."""
+    commands = next((a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction)), {})
+    current = parser
+    for token in argv:
+        if token == "--":
+            break
+        if current is parser and token in commands:
+            current = commands[token]
+            continue
+        if not token.startswith("-") or token == "-" or _is_number(token):
+            continue
+        known = [s for action in current._actions for s in action.option_strings]
+        name = token.partition("=")[0]
+        if token.startswith("--"):  # a long option, or an unambiguous abbreviation of one
+            ok = any(k.startswith(name) for k in known if k.startswith("--"))
+        else:  # a short option, with its value attached (-pKEY=VALUE) or not
+            ok = any(token.startswith(k) for k in known if not k.startswith("--"))
+        if not ok:
+            return current, token
+    return None
+
+
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``gausspp`` command: the exit code (0 ok, 1 error or failed run, 2 usage)."""
+    parser = _parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        args = _parser().parse_args(argv)
+        unknown = _unknown_option(parser, argv)
+        if unknown is not None:
+            unknown[0].error(f"unrecognized arguments: {unknown[1]}")
+        args = parser.parse_args(argv)
     except SystemExit as exc:  # --help (0) or a usage error (2), already printed
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
     try:
