@@ -8,10 +8,19 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from .errors import NonFiniteError, NotAffineError, ShapeError
+from ._checks import array, short
+from .errors import NotAffineError, ShapeError, SymbolicError
+
+#: What to write instead when a user function cannot run on casadi symbols.
+CASADI_HINT = (
+    "write it with casadi operations (ca.sin, ca.sqrt, ca.dot, ...; not math.sin or float()) and index only within "
+    "its size"
+)
 
 
 def _to_sx(value: Any) -> ca.SX:
+    if isinstance(value, (str, bytes)):  # a sequence of itself: would recurse forever below
+        raise TypeError(f"a {type(value).__name__} is no casadi expression")
     if isinstance(value, ca.SX):
         return value
     if isinstance(value, ca.MX):
@@ -19,6 +28,8 @@ def _to_sx(value: Any) -> ca.SX:
     if isinstance(value, (ca.DM, int, float, np.floating, np.integer)):
         return ca.SX(value)
     if isinstance(value, np.ndarray) and value.dtype != object:
+        if value.ndim > 2 or value.dtype.kind not in "biuf":
+            raise TypeError(f"cannot turn a {value.ndim}-d array of {value.dtype} into a casadi expression")
         return ca.SX(ca.DM(np.atleast_1d(value).astype(float)))
     if isinstance(value, (Sequence, np.ndarray)):
         rows = [v for v in value]
@@ -37,8 +48,8 @@ def as_expression(value: Any, shape: tuple[int | None, int | None], what: str) -
     """
     try:
         expr = _to_sx(value)
-    except TypeError as exc:
-        raise ShapeError(f"{what} returned {value!r}: {exc}") from None
+    except (TypeError, ValueError, NotImplementedError, RuntimeError) as exc:  # casadi raises the last two
+        raise SymbolicError(f"{what} returned {short(value)}: {_last_line(exc)}; {CASADI_HINT}") from None
     rows, cols = shape
     if rows == 1 and expr.size2() == 1 and (cols is None or expr.size1() == cols) and expr.size1() != 1:
         expr = expr.T
@@ -54,14 +65,39 @@ def as_expression(value: Any, shape: tuple[int | None, int | None], what: str) -
 
 def evaluate(fn: Callable[..., Any], args: Sequence[Any], shape: tuple[int | None, int | None], what: str) -> ca.SX:
     """Call a user callable on symbols and check its result's shape."""
+    if not callable(fn):
+        raise SymbolicError(f"{what} must be a function, got {short(fn)}")
     try:
         value = fn(*args)
-    except (TypeError, IndexError, AttributeError, RuntimeError) as exc:  # casadi raises RuntimeError
-        raise ShapeError(
-            f"{what} could not be evaluated on casadi symbols ({type(exc).__name__}: {exc}); "
-            "write it with casadi operations (ca.sin, ca.dot, ...) and index only within its size"
+    except (TypeError, ValueError, IndexError, AttributeError, RuntimeError) as exc:  # casadi raises RuntimeError
+        raise SymbolicError(
+            f"{what} could not be evaluated on casadi symbols ({type(exc).__name__}: {_last_line(exc)}); {CASADI_HINT}"
         ) from exc
-    return as_expression(value, shape, what)
+    expr = as_expression(value, shape, what)
+    if _has_nan_constant(expr):
+        raise SymbolicError(
+            f"{what} holds a NaN constant where a formula was expected: a function of the math module (math.sin, "
+            "math.sqrt, ...) or float() was applied to a casadi symbol, which casadi turns into NaN; casadi symbols "
+            "need casadi's functions (casadi.sin, casadi.sqrt, ...) or numpy's, which accept them (np.sin)"
+        )
+    return expr
+
+
+def _last_line(exc: Exception) -> str:
+    """The last non-empty line of an exception's message (casadi's say where in C++ first, then what)."""
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    return lines[-1] if lines else type(exc).__name__
+
+
+def _has_nan_constant(expr: ca.SX) -> bool:
+    """Whether the expression graph of ``expr`` holds a NaN constant (what ``math.sin(symbol)`` leaves).
+
+    No formula a user means holds NaN (``NaN · 0`` is already simplified away by casadi).
+    """
+    fn = ca.Function("scan", ca.symvar(expr), [expr])
+    return any(
+        fn.instruction_id(k) == ca.OP_CONST and np.isnan(fn.instruction_constant(k)) for k in range(fn.n_instructions())
+    )
 
 
 def require_affine_in(expr: ca.SX, v: ca.SX, what: str) -> None:
@@ -72,11 +108,9 @@ def require_affine_in(expr: ca.SX, v: ca.SX, what: str) -> None:
         )
 
 
-def check_constant_matrix(name: str, value: Any, shape: tuple[int, int]) -> np.ndarray:
-    """A numeric matrix parameter: finite, of the given shape."""
-    arr = np.asarray(value, dtype=float)
+def check_constant_matrix(owner: str, name: str, value: Any, shape: tuple[int, int]) -> np.ndarray:
+    """A numeric matrix parameter ``name`` of ``owner`` (a class): real, finite, of the given shape."""
+    arr = array(owner, name, value)
     if arr.shape != shape:
-        raise ShapeError(f"{name} has shape {arr.shape}, expected {shape}")
-    if not np.all(np.isfinite(arr)):
-        raise NonFiniteError(f"{name} contains NaN or inf: {arr.tolist()}")
+        raise ShapeError(f"{owner}: {name} has shape {arr.shape}, expected {shape}")
     return arr

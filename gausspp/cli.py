@@ -15,7 +15,6 @@ import io
 import json
 import os
 import sys
-import textwrap
 import threading
 import time
 import warnings
@@ -29,8 +28,9 @@ import numpy as np
 
 from . import methods, qp, scenes
 from .crosscheck import crosscheck
-from .errors import GaussppError, UnknownNameError
+from .errors import GaussppError, LongRunWarning, UnknownNameError
 from .model import Model
+from .scenes._scene import kinds as parameter_kinds
 from .trajectory import Trajectory
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -107,49 +107,37 @@ class _Progress:
 
 @contextmanager
 def _warnings_as_lines() -> Iterator[None]:
-    """Show warnings raised inside as one line each on stderr (``gausspp: warning: ...``), once per message."""
-    with warnings.catch_warnings(record=True) as caught:
+    """Show warnings raised inside as one line each on stderr (``gausspp: warning: ...``), once per message:
+    a :class:`~gausspp.LongRunWarning` at once (it announces the wait), the others when the block ends."""
+    caught: list[tuple[type[Warning], str]] = []
+    seen: set[str] = set()
+
+    def show(category: type[Warning], message: object) -> None:
+        line = _one_line(message)
+        if line not in seen:
+            seen.add(line)
+            print(f"gausspp: warning: {category.__name__}: {line}", file=sys.stderr, flush=True)
+
+    def collect(message: Warning | str, category: type[Warning], *_: object, **__: object) -> None:
+        if issubclass(category, LongRunWarning):
+            show(category, message)
+        else:
+            caught.append((category, str(message)))
+
+    with warnings.catch_warnings():
         warnings.simplefilter("always")
+        warnings.showwarning = collect
         try:
             yield
         finally:
-            seen: set[str] = set()
-            for w in caught:
-                line = _one_line(w.message)
-                if line not in seen:
-                    seen.add(line)
-                    print(f"gausspp: warning: {w.category.__name__}: {line}", file=sys.stderr)
+            for category, message in caught:
+                show(category, message)
 
 
 # -- scene parameters ------------------------------------------------------------------------------
 def _scene_parameters(name: str) -> dict[str, inspect.Parameter]:
-    """The keyword parameters of the scene's builder (those of the module's ``build`` behind a ``**params`` wrapper)."""
-    builder = scenes._builder(name)
-    sig, fixed = inspect.signature(builder), set()
-    if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
-        base = getattr(sys.modules[builder.__module__], "build", None)
-        if base is not None and base is not builder:
-            sig = inspect.signature(base)
-            try:  # keywords the wrapper passes itself (``build(law="rate", **params)``) are not the user's
-                tree = ast.parse(textwrap.dedent(inspect.getsource(builder)))
-                fixed = {kw.arg for kw in ast.walk(tree) if isinstance(kw, ast.keyword) and kw.arg}
-            except (OSError, TypeError, SyntaxError):
-                pass
-    return {
-        k: p
-        for k, p in sig.parameters.items()
-        if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY) and k not in fixed
-    }
-
-
-def _annotation(param: inspect.Parameter) -> set[str]:
-    """The parameter's type as a set of names (``"float | None"`` → {"float", "None"}); from the default if bare."""
-    ann = param.annotation
-    if ann is inspect.Parameter.empty:
-        default = param.default
-        return {type(default).__name__} if isinstance(default, (bool, int, float, str)) else set()
-    text = ann if isinstance(ann, str) else getattr(ann, "__name__", str(ann))
-    return {part.strip() for part in text.split("|")}
+    """The keyword parameters of the scene's builder (:func:`gausspp.scenes.parameters`)."""
+    return scenes.parameters(name)
 
 
 def _parse_value(option: str, key: str, text: str, param: inspect.Parameter) -> Any:
@@ -158,7 +146,7 @@ def _parse_value(option: str, key: str, text: str, param: inspect.Parameter) -> 
         value: Any = ast.literal_eval(text)
     except (ValueError, SyntaxError, TypeError, MemoryError, RecursionError):
         value = text
-    kinds = _annotation(param)
+    kinds = parameter_kinds(param)
     if kinds == {"str"}:
         return value if isinstance(value, str) else text
     if kinds & {"float", "int"}:
@@ -770,7 +758,7 @@ def list_scenes(args: argparse.Namespace) -> int:
     print(f"{args.name}: {inspect.getdoc(builder)}\n\nparameters (gausspp run {args.name} --param KEY=VALUE):")
     for key, param in _scene_parameters(args.name).items():
         ann = param.annotation
-        kind = ann if isinstance(ann, str) else " | ".join(sorted(_annotation(param))) or "any"
+        kind = ann if isinstance(ann, str) else " | ".join(sorted(parameter_kinds(param))) or "any"
         print(f"  {key:16s} {kind:14s} default {param.default!r}")
     return EXIT_OK
 
@@ -1185,10 +1173,48 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _unknown_option(parser: argparse.ArgumentParser, argv: Sequence[str]) -> tuple[argparse.ArgumentParser, str] | None:
+    """The first option in ``argv`` that neither ``parser`` nor the subcommand named in ``argv`` knows, with the
+    parser it was given to. argparse reports a missing argument (``COMMAND``, ``SCENE``) before an unknown option,
+    which misleads when the option is the mistake (``gausspp --bogus-flag``)."""
+    commands = next((a.choices for a in parser._actions if isinstance(a, argparse._SubParsersAction)), {})
+    current = parser
+    for token in argv:
+        if token == "--":
+            break
+        if current is parser and token in commands:
+            current = commands[token]
+            continue
+        if not token.startswith("-") or token == "-" or _is_number(token):
+            continue
+        known = [s for action in current._actions for s in action.option_strings]
+        name = token.partition("=")[0]
+        if token.startswith("--"):  # a long option, or an unambiguous abbreviation of one
+            ok = any(k.startswith(name) for k in known if k.startswith("--"))
+        else:  # a short option, with its value attached (-pKEY=VALUE) or not
+            ok = any(token.startswith(k) for k in known if not k.startswith("--"))
+        if not ok:
+            return current, token
+    return None
+
+
+def _is_number(token: str) -> bool:
+    try:
+        float(token)
+    except ValueError:
+        return False
+    return True
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``gausspp`` command: the exit code (0 ok, 1 error or failed run, 2 usage)."""
+    parser = _parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
     try:
-        args = _parser().parse_args(argv)
+        unknown = _unknown_option(parser, argv)
+        if unknown is not None:
+            unknown[0].error(f"unrecognized arguments: {unknown[1]}")
+        args = parser.parse_args(argv)
     except SystemExit as exc:  # --help (0) or a usage error (2), already printed
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
     try:

@@ -15,7 +15,7 @@ from typing import Any
 
 import casadi as ca
 
-from ._symbolic import evaluate
+from ._symbolic import evaluate, require_affine_in
 from .errors import InputError
 from .frontends import Mechanism
 from .realizations import Realization, as_realization
@@ -62,14 +62,30 @@ class Constraint:
         name: str | None = None,
         realization: Realization | str | None = None,
     ) -> None:
-        self._phi = phi
+        if name is not None and not isinstance(name, str):
+            raise InputError(f"{type(self).__name__}: name must be a string, got {name!r}")
+        self._phi = _function(self, "phi", phi)
         self.name = name
         self.realization = as_realization(realization)
 
     def expressions(self, mech: Mechanism) -> ConstraintExpressions:
-        """Build ``Φ``, ``J`` and ``φ`` on a mechanism's symbols."""
-        Phi = evaluate(self._phi, (mech.q, mech.v, mech.t), (None, 1), f"constraint {self.name!r}: Φ(q, v, t)")
+        """Build ``Φ``, ``J`` and ``φ`` on a mechanism's symbols.
+
+        ``Φ`` must be affine in the velocities, ``∂²Φ/∂v² ≡ 0`` (checked symbolically): then
+        ``J = ∂Φ/∂v`` does not depend on ``v``, the virtual displacements ``J δx = 0`` are those of
+        the paper, and the projection onto ``Φ = 0`` is one linear solve.
+        """
+        what = f"{self._title}: Φ(q, v, t)"
+        Phi = evaluate(self._phi, (mech.q, mech.v, mech.t), (None, 1), what)
+        require_affine_in(Phi, mech.v, what)
         return _differentiate(Phi, mech, g=None)
+
+    @property
+    def _title(self) -> str:
+        """How messages name the constraint: ``constraint 'rod'`` (or ``unnamed Constraint``)."""
+        return (
+            f"constraint {self.name!r}" if self.name is not None else f"unnamed {type(self).__name__} (give name=...)"
+        )
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r}, realization={self.realization!r})"
@@ -93,10 +109,10 @@ class Holonomic(Constraint):
         realization: Realization | str | None = None,
     ) -> None:
         super().__init__(lambda q, v, t: None, name=name, realization=realization)
-        self._g = g
+        self._g = _function(self, "g", g)  # ġ is affine in the velocities by construction
 
     def expressions(self, mech: Mechanism) -> ConstraintExpressions:
-        g = evaluate(self._g, (mech.q, mech.t), (None, 1), f"constraint {self.name!r}: g(q, t)")
+        g = evaluate(self._g, (mech.q, mech.t), (None, 1), f"{self._title}: g(q, t)")
         Phi = ca.jacobian(g, mech.q) @ mech.qdot + ca.jacobian(g, mech.t)
         return _differentiate(Phi, mech, g=g)
 
@@ -130,13 +146,23 @@ class Unilateral(Holonomic):
         try:
             e = float(restitution)
         except (TypeError, ValueError):
-            raise InputError(f"Unilateral {name!r}: restitution must be a number, got {restitution!r}") from None
+            raise InputError(f"{self._title}: restitution must be a number, got {restitution!r}") from None
         if not 0.0 <= e <= 1.0:
-            raise InputError(f"Unilateral {name!r}: restitution must lie in [0, 1], got {restitution!r}")
+            raise InputError(f"{self._title}: restitution must lie in [0, 1], got {restitution!r}")
         self.restitution = e
 
     def __repr__(self) -> str:
         return f"Unilateral(name={self.name!r}, restitution={self.restitution})"
+
+
+def _function(owner: Constraint, what: str, fn: Any) -> Callable[..., Any]:
+    """``fn`` if it can be called, else an error naming the constraint and the argument."""
+    if not callable(fn):
+        raise InputError(
+            f"{type(owner).__name__}: {what} must be a function of the symbols (e.g. lambda q, v, t: v[1] - v[0]), "
+            f"got {fn!r}"
+        )
+    return fn  # type: ignore[no-any-return]
 
 
 def _differentiate(Phi: ca.SX, mech: Mechanism, g: ca.SX | None) -> ConstraintExpressions:

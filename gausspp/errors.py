@@ -21,6 +21,14 @@ class ShapeError(InputError):
     """An array or a symbolic expression has the wrong shape."""
 
 
+class SymbolicError(ShapeError):
+    """A user function could not be written on casadi symbols.
+
+    It raised on them, returned something that is no expression (a string, ``None``), or applied a
+    function of :mod:`math` (or ``float()``) to a symbol, which casadi turns into a NaN constant.
+    """
+
+
 class NonFiniteError(InputError):
     """A NaN or an infinity was passed in, or appeared in the model's output."""
 
@@ -71,5 +79,17 @@ class BackendUnavailableError(GaussppError, ImportError):
     """A known QP backend is not installed on this machine."""
 
 
-class RealizabilityWarning(UserWarning):
+class GaussppWarning(UserWarning):
+    """Root of every gausspp warning."""
+
+
+class RealizabilityWarning(GaussppWarning):
     """The realizability margin is small: the reaction is large and ill-determined."""
+
+
+class LongRunWarning(GaussppWarning):
+    """A run asks for very many steps (an estimate is given up front, before the wait)."""
+
+
+class SweepLogWarning(GaussppWarning):
+    """A line of a sweep's JSON-lines log cannot be read: it is skipped and its task runs again."""

@@ -248,7 +248,7 @@ class RigidBody(Mechanism):
     """
 
     def __init__(self, inertia: Any, torque: Expr | None = None) -> None:
-        I = check_constant_matrix("inertia", inertia, (3, 3))
+        I = check_constant_matrix("RigidBody", "inertia", inertia, (3, 3))
         if not np.allclose(I, I.T, rtol=1e-12, atol=0.0):
             raise InputError(f"inertia must be symmetric, got {I.tolist()}")
         if np.linalg.eigvalsh(I).min() <= 0:

@@ -34,7 +34,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.interpolate import make_interp_spline
 
-from .errors import InitialDataError, InputError, NonFiniteError, QPSolveError, ShapeError
+from ._checks import array, positive, short
+from .errors import InitialDataError, InputError, NonFiniteError, QPSolveError, ShapeError, UnknownNameError
 from .gauss_qp import RANK_TOL
 from .model import Model
 
@@ -141,14 +142,26 @@ def _data_function(model: Model) -> ca.Function:
     return fn
 
 
+def _window(window: Any) -> tuple[float, float]:
+    """``window`` as two finite times ``(t1, t2)``."""
+    ends = array("verify", "window", window)
+    if ends.shape != (2,):
+        raise ShapeError(f"window must be two times (t1, t2), got {short(window)}")
+    return float(ends[0]), float(ends[1])
+
+
 def _path(trajectory: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     get = trajectory.get if isinstance(trajectory, Mapping) else lambda k, d=None: getattr(trajectory, k, d)
-    try:
-        t, q, v = (np.asarray(get(k), dtype=float) for k in ("t", "q", "v"))
-    except (TypeError, ValueError):
-        raise InputError("the trajectory must provide numeric t, q and v (a Trajectory or a mapping)") from None
+    missing = [k for k in ("t", "q", "v") if get(k, None) is None]
+    if missing:
+        raise InputError(
+            f"trajectory must be a gp.Trajectory (from gp.simulate) or a mapping with t, q and v; got "
+            f"{type(trajectory).__name__} {short(trajectory)} without {', '.join(missing)}"
+        )
+    t, q, v = (array("trajectory", k, get(k), finite=False) for k in ("t", "q", "v"))  # located below if not
     a = get("a", None)
-    return t, np.atleast_2d(q.T).T, np.atleast_2d(v.T).T, None if a is None else np.atleast_2d(np.asarray(a, float).T).T
+    a = None if a is None else array("trajectory", "a", a, finite=False)
+    return t, np.atleast_2d(q.T).T, np.atleast_2d(v.T).T, None if a is None else np.atleast_2d(a.T).T
 
 
 def check_samples(t: np.ndarray, q: np.ndarray, v: np.ndarray, *, monotone: bool = True) -> None:
@@ -174,6 +187,10 @@ def discretize(
     constraint_tol: float = 1e-6,
 ) -> Discretized:
     """Evaluate ``R``, the metric and (20) on the nodes of a path (checked)."""
+    if not isinstance(model, Model):
+        raise InputError(f"model must be a gp.Model, got {short(model)}")
+    if nodes is not None:
+        nodes = positive("nodes", nodes, integer=True, hint=" (uniform nodes in the window, at least 5)")
     t, q, v, a = _path(trajectory)
     N = t.size
     if q.shape != (N, model.nq) or v.shape != (N, model.nv):
@@ -188,11 +205,11 @@ def discretize(
     t, q, v = t[keep], q[keep], v[keep]
     a = a[keep] if a is not None else None
     N = t.size
-    t1, t2 = (t[0], t[-1]) if window is None else (float(window[0]), float(window[1]))
+    t1, t2 = (t[0], t[-1]) if window is None else _window(window)
     if not (t[0] <= t1 < t2 <= t[-1]):
         raise InputError(f"window ({t1:g}, {t2:g}) is outside the data [{t[0]:g}, {t[-1]:g}] or empty")
     if acceleration not in ("path", "recorded"):
-        raise InputError(f"acceleration={acceleration!r} is unknown; use 'path' (from v(t)) or 'recorded'")
+        raise UnknownNameError(f"acceleration={acceleration!r} is unknown; use 'path' (from v(t)) or 'recorded'")
     if acceleration == "recorded" and a is None:
         raise InputError("acceleration='recorded' needs the trajectory's accelerations a")
     recorded = a if a is not None else v  # (only read when acceleration == "recorded")
@@ -245,7 +262,7 @@ def _metric(metric: str | np.ndarray, A: np.ndarray, n: int) -> np.ndarray:
             return A
         if metric == "identity":
             return np.broadcast_to(np.eye(n), A.shape).copy()
-        raise InputError(f"metric={metric!r} is unknown; use 'A', 'identity' or an SPD (n, n) array")
+        raise UnknownNameError(f"metric={metric!r} is unknown; use 'A', 'identity' or an SPD (n, n) array")
     G = np.asarray(metric, float)
     if G.shape != (n, n) or not np.allclose(G, G.T) or np.linalg.eigvalsh(0.5 * (G + G.T)).min() <= 0:
         raise InputError(f"metric must be a symmetric positive definite ({n}, {n}) array")
@@ -438,7 +455,7 @@ def verify(
     :class:`~gausspp.InputError` with the reasons.
     """
     if method not in ("qp", "closed-form"):
-        raise InputError(f"method={method!r} is unknown; use 'qp' or 'closed-form'")
+        raise UnknownNameError(f"method={method!r} is unknown; use 'qp' or 'closed-form'")
     failed = getattr(trajectory, "status", "success") != "success"
     if model.contacts or model.bounded or failed:
         if nodes is not None:

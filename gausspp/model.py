@@ -15,6 +15,7 @@ import casadi as ca
 import numpy as np
 
 from . import qp
+from ._checks import positive
 from ._outcome import Group, Where, evaluation_failed, to_result, warn_small_margin
 from .constraints import Constraint, Unilateral
 from .errors import (
@@ -99,10 +100,11 @@ class Model:
                 raise InputError(
                     f"constraints must be Constraint, Holonomic or Unilateral objects, got {type(c).__name__}"
                 )
-        if not 0 <= margin_error < margin_warn:
+        margin_warn = positive("margin_warn", margin_warn)
+        margin_error = positive("margin_error", margin_error, zero_ok=True)
+        contact_tol = positive("contact_tol", contact_tol, zero_ok=True)
+        if not margin_error < margin_warn:
             raise InputError(f"need 0 ≤ margin_error < margin_warn, got {margin_error} and {margin_warn}")
-        if not (contact_tol >= 0 and np.isfinite(contact_tol)):
-            raise InputError(f"contact_tol must be a finite number ≥ 0, got {contact_tol}")
         self.mechanism = mechanism
         all_names = [c.name if c.name is not None else f"constraint {i}" for i, c in enumerate(constraints)]
         if len(set(all_names)) != len(all_names):

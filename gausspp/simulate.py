@@ -19,6 +19,7 @@ import numpy as np
 
 from . import methods as _methods
 from . import qp
+from ._checks import array, number, positive
 from ._outcome import QP_TOLERANCE, Where, to_result
 from ._rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .drift import Baumgarte, Stabilization, as_stabilization, projection_function
@@ -27,9 +28,12 @@ from .errors import (
     InitialDataError,
     InputError,
     IntegrationError,
+    LongRunWarning,
     NonFiniteError,
     RealizabilityError,
     RealizabilityWarning,
+    ShapeError,
+    UnknownNameError,
 )
 from .model import Model
 from .trajectory import Trajectory
@@ -93,19 +97,31 @@ def simulate(
     -------
     Trajectory
     """
+    if not isinstance(model, Model):
+        raise InputError(f"model must be a gp.Model (scenes carry one: gp.scenes.get(name).model), got {model!r}")
     if method is None:  # fixed-step RK4, or DOP853 where contact events must be located
         method = "DOP853" if model.contacts else "rk4"
     meth = _methods.get(method)
-    t0, t_end = float(t0), float(t_end)
-    if not (np.isfinite(t0) and np.isfinite(t_end) and t_end > t0):
-        raise InputError(f"need finite t0 < t_end, got t0={t0}, t_end={t_end}")
-    if not meth.adaptive:
-        if dt is None or not (dt > 0) or not np.isfinite(dt):
-            raise InputError(f"method {meth.name!r} has a fixed step: give dt > 0 (got dt={dt})")
-    elif dt is not None and not dt > 0:
-        raise InputError(f"dt must be positive, got {dt}")
+    t0 = number(f"t0 must be a finite number, got {t0!r}", t0)
+    t_end = number(f"t_end must be a finite number, got {t_end!r}", t_end)
+    if not t_end > t0:
+        raise InputError(f"need t0 < t_end, got t0={t0}, t_end={t_end}")
+    if dt is None and not meth.adaptive:
+        raise InputError(f"method {meth.name!r} has a fixed step: give dt > 0, e.g. dt={(t_end - t0) / 1000:.3g}")
+    if dt is not None:
+        dt = positive("dt", dt, hint=" (the step; for adaptive methods the first and largest)")
+    rtol = positive("rtol", rtol, hint=" (the relative tolerance of adaptive methods, e.g. rtol=1e-9)")
+    atol = positive("atol", atol, zero_ok=True, hint=" (the absolute tolerance of adaptive methods, e.g. atol=1e-12)")
+    constraint_tol = positive("constraint_tol", constraint_tol, zero_ok=True)
+    rest_speed = positive("rest_speed", rest_speed, zero_ok=True)
+    max_events = positive("max_events", max_events, integer=True)
+    if not isinstance(throw, (bool, np.bool_)):
+        raise InputError(f"throw must be True or False, got {throw!r}")
+    record = _check_record(record, t0, t_end)
+    if dt is not None:
+        _check_step_count(meth, model, t0, t_end, dt, record)
     if solver not in ("qp", "direct"):
-        raise InputError(f"solver={solver!r} is unknown; use 'qp' or 'direct'")
+        raise UnknownNameError(f"solver={solver!r} is unknown; use 'qp' or 'direct'")
     if solver == "direct" and backend is not None:
         raise InputError(f"backend={backend!r} applies to solver='qp' only")
     if meth.name == "cvodes" and solver != "direct":
@@ -197,6 +213,61 @@ def simulate(
 
 
 # -- set-up ----------------------------------------------------------------------------------
+#: A run with more fixed steps than this warns up front (:class:`~gausspp.LongRunWarning`) with the count.
+LONG_RUN_STEPS = 1_000_000
+#: A run with more steps than this is refused: it would run for days and its samples would not fit in memory.
+MAX_STEPS = 10**10
+#: The states a run keeps (every step on the compiled lane, the recorded ones elsewhere) may take this many bytes.
+MAX_KEPT_BYTES = 2**31
+
+
+def _check_record(record: Any, t0: float, t_end: float) -> Any:
+    """``record``: a positive integer (every ``record``-th step) or a 1-D array of times in ``[t0, t_end]``."""
+    if np.isscalar(record) or record is None:
+        return positive("record", record, integer=True, hint=" (record every k-th step) or an array of times")
+    times = array("simulate", "record", record)
+    if times.ndim != 1 or times.size == 0:
+        raise ShapeError(f"record must be a positive integer or a 1-D array of times, got shape {times.shape}")
+    if times.min() < t0 or times.max() > t_end:
+        raise InputError(
+            f"record times must lie within [t0, t_end] = [{t0:g}, {t_end:g}], got {times.min():g} … {times.max():g}"
+        )
+    return times
+
+
+def _check_step_count(meth: _methods.Method, model: Model, t0: float, t_end: float, dt: float, record: Any) -> None:
+    """Refuse a run of more than :data:`MAX_STEPS` steps or whose kept states exceed :data:`MAX_KEPT_BYTES`; warn
+    (:class:`~gausspp.LongRunWarning`) above :data:`LONG_RUN_STEPS` steps, before the wait. For an adaptive method
+    ``dt`` is the largest step, so the count is a lower bound."""
+    steps = (t_end - t0) / dt  # a float: t_end=1e300 must not overflow an integer
+    bound = "at least " if meth.adaptive else ""
+    what = f"t_end - t0 = {t_end - t0:.6g} with dt={dt:.3g} is {bound}{steps:.3g} steps"
+    if steps > MAX_STEPS:
+        raise InputError(
+            f"{what}, more than the {MAX_STEPS:.0e} a run may take (days of computing): enlarge dt or shorten t_end"
+        )
+    width = 8 * (model.nq + model.nv + model.n_lam + 2)
+    if meth.lane == "compiled" and not meth.adaptive:  # the compiled RK keeps every step's state
+        kept = steps + 1
+    elif np.isscalar(record):  # every record-th fixed step; every accepted step of an adaptive method
+        kept = steps + 1 if meth.adaptive else steps / record + 2
+    else:
+        kept = len(record)
+    if kept * width > MAX_KEPT_BYTES:
+        keep_less = "" if meth.lane == "compiled" else ", or record fewer steps (record=k keeps every k-th)"
+        raise InputError(
+            f"{what}; method {meth.name!r} would keep {kept:.3g} states ({kept * width / 2**30:.3g} GiB, more than "
+            f"{MAX_KEPT_BYTES / 2**30:g} GiB): enlarge dt or shorten t_end{keep_less}"
+        )
+    if steps > LONG_RUN_STEPS:
+        warnings.warn(
+            f"{what} (method {meth.name!r}): this run will take long; enlarge dt or shorten t_end"
+            + (", or use an adaptive or compiled method (DOP853, rk4-compiled)" if meth.lane == "python" else ""),
+            LongRunWarning,
+            stacklevel=3,
+        )
+
+
 def _redundant_rows(
     model: Model, solver: str, backend: str | None, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray
 ) -> bool:
@@ -352,9 +423,7 @@ def _fixed_step(
 
 def _keep_indices(n_steps: int, t0: float, dt: float, record: Any) -> np.ndarray:
     if np.isscalar(record):
-        every = int(record)  # type: ignore[arg-type]
-        if every < 1:
-            raise InputError(f"record must be a positive integer or an array of times, got {record!r}")
+        every = int(record)  # type: ignore[arg-type]  # checked by _check_record
         idx = np.arange(0, n_steps + 1, every)
         return idx if idx[-1] == n_steps else np.append(idx, n_steps)
     times = np.asarray(record, float)
@@ -388,9 +457,7 @@ def _scipy(
         options["jac"] = _jacobian(rhs)
     solver_cls = getattr(si, meth.name)
     solver = solver_cls(rhs, t0, y0, t_end, **options)
-    times = None if np.isscalar(record) else np.sort(np.asarray(record, float))
-    if times is not None and (times.size == 0 or times[0] < t0 or times[-1] > t_end):
-        raise InputError(f"record times must lie within [t0, t_end] = [{t0:g}, {t_end:g}]")
+    times = None if np.isscalar(record) else np.sort(np.asarray(record, float))  # checked by _check_record
     keep_start = times is None or times[0] == t0
     ts, ys = ([t0], [y0.copy()]) if keep_start else ([], [])
     failure, steps, t_prev = None, 0, t0

@@ -32,7 +32,10 @@ Nothing is lost: with ``out=path`` every finished task is appended to a JSON-lin
 (its index, its parameters, and its result or its error text). Running the same sweep with the same
 ``out`` again skips the tasks already recorded, so an interrupted sweep resumes where it stopped and the
 merged result equals an uninterrupted run. The log's first line names the task, so a log of another task,
-or of other parameters, is refused rather than merged. A task that raises is recorded with its error; the
+or of other parameters, is refused rather than merged. A record a kill cut short (an unterminated last line)
+is dropped silently; any other line that is not a record (damaged by hand or by a disk) is skipped with a
+:class:`~gausspp.SweepLogWarning` naming the file and line number, and its task runs again — one bad line
+does not cost the good results around it. A task that raises is recorded with its error; the
 others go on. With ``out="name.npz"`` the JSON-lines log is ``name.jsonl`` beside it and the finished sweep is also
 written as NPZ columns (:meth:`SweepResult.to_npz`; Parquet is not offered: it would need pyarrow).
 
@@ -60,7 +63,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 
 import numpy as np
 
-from .errors import GaussppError, InputError, UnknownNameError
+from .errors import GaussppError, InputError, SweepLogWarning, UnknownNameError
 
 if TYPE_CHECKING:
     from .report import Row
@@ -456,7 +459,14 @@ def _task_name(task: Any) -> str:
 
 
 def _read_out(path: Path, keys: list[str], task: str) -> dict[int, tuple[dict[str, Any] | None, str | None]]:
-    """Records already in ``path`` (a truncated last line, left by a kill, is ignored)."""
+    """Records already in ``path``.
+
+    An unterminated last line is the record a kill cut short: it is ignored (and cut off before the sweep
+    appends, :func:`_open_log`). Any other line that is not a record (not JSON, no ``index``) is skipped
+    with a :class:`~gausspp.SweepLogWarning` naming the file and the line: its task, if it had one, runs
+    again, and the rest of the log is kept — resuming should not throw away good results because one line
+    was damaged. Blank lines are skipped silently.
+    """
     done: dict[int, tuple[dict[str, Any] | None, str | None]] = {}
     if not path.exists():
         return done
@@ -466,6 +476,8 @@ def _read_out(path: Path, keys: list[str], task: str) -> dict[int, tuple[dict[st
         raise SweepError(f"cannot read out={str(path)!r}: {exc}") from None
     with fh:
         for lineno, line in enumerate(fh, 1):
+            if not line.strip() or not line.endswith("\n"):
+                continue  # blank, or the partial last record of a killed sweep
             try:
                 rec = json.loads(line)
                 if isinstance(rec, dict) and "task" in rec and "index" not in rec:
@@ -476,8 +488,14 @@ def _read_out(path: Path, keys: list[str], task: str) -> dict[int, tuple[dict[st
                         )
                     continue
                 index = int(rec["index"])
-            except (ValueError, KeyError, TypeError):
-                continue  # a partial line written when the process was killed
+            except (ValueError, KeyError, TypeError, IndexError, OverflowError):
+                warnings.warn(
+                    f"out={str(path)!r} line {lineno} is not a record of this sweep ({line.strip()[:60]!r}); it is "
+                    "skipped and its task, if it had one, runs again — delete the line to silence this",
+                    SweepLogWarning,
+                    stacklevel=3,
+                )
+                continue
             if not 0 <= index < len(keys) or _canonical(rec.get("params"), "params") != keys[index]:
                 raise SweepError(
                     f"out={str(path)!r} line {lineno} records task {index} with other parameters than this sweep "
@@ -485,6 +503,16 @@ def _read_out(path: Path, keys: list[str], task: str) -> dict[int, tuple[dict[st
                 )
             done[index] = (rec.get("result"), rec.get("error"))
     return done
+
+
+def _cut_partial_line(path: Path) -> None:
+    """Cut off an unterminated last line (a record a kill cut short; :func:`_read_out` ignored it)."""
+    if not path.exists():
+        return
+    data = path.read_bytes()
+    if data and not data.endswith(b"\n"):
+        with path.open("rb+") as fh:
+            fh.truncate(data.rfind(b"\n") + 1)
 
 
 class _Progress:
@@ -637,16 +665,12 @@ def sweep(
     if path is not None:
         try:
             path.parent.mkdir(parents=True, exist_ok=True)
+            _cut_partial_line(path)  # a kill's partial last record must not swallow the next one
             sink = path.open("a", encoding="utf-8")
         except OSError as exc:
             raise SweepError(f"cannot write out={str(path)!r}: {exc}") from None
         if sink.tell() == 0:
             sink.write(_canonical({"task": name}, "the task's name") + "\n")
-        else:  # a partial last line from a kill must not swallow the next record
-            with path.open("rb") as fh:
-                fh.seek(-1, os.SEEK_END)
-                if fh.read(1) != b"\n":
-                    sink.write("\n")
         sink.flush()
     bar = _Progress(len(todo), sys.stderr if progress else None)
 

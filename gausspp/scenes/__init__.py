@@ -7,11 +7,14 @@ for: each scene builds only what it needs (no λ state, QP inequality rows or NL
 from __future__ import annotations
 
 import importlib
+import inspect
+import sys
 from collections.abc import Callable
 from typing import Any
 
 from ..errors import InputError, UnknownNameError
-from ._scene import Scene
+from ._scene import Scene, check_parameters
+from ._scene import parameters as _parameters
 
 #: scene name → module in this package
 _MODULES: dict[str, str] = {
@@ -37,7 +40,7 @@ _MODULES: dict[str, str] = {
 #: rows): only the general Gauss QP steps them, so studies that compare the direct formula skip them.
 GENERAL = ("block-on-floor", "bouncing-pendulum", "saturated-crane", "two-actuator-servo", "four-bar-redundant")
 
-__all__ = ["GENERAL", "Scene", "describe", "get", "names"]
+__all__ = ["GENERAL", "Scene", "describe", "get", "names", "parameters"]
 
 
 def names(kind: str = "all") -> list[str]:
@@ -57,12 +60,28 @@ def _builder(name: str) -> Callable[..., Scene]:
     return builder
 
 
-def get(name: str, **params: Any) -> Scene:
-    """Build the scene ``name`` with ``params`` (see each scene's ``build`` docstring)."""
+def parameters(name: str) -> dict[str, inspect.Parameter]:
+    """The parameters of scene ``name``'s builder (name, default, annotation)."""
     if name not in _MODULES:
         raise UnknownNameError(f"scene {name!r} is unknown; available: {names()}")
+    return _parameters(_builder(name))
+
+
+def get(name: str, **params: Any) -> Scene:
+    """Build the scene ``name`` with ``params`` (see each scene's ``build`` docstring).
+
+    Every parameter is checked first, in one place (:func:`~gausspp.scenes._scene.check_parameters`):
+    an unknown name is an :class:`~gausspp.UnknownNameError`, a value of the wrong type (``F="two"``,
+    ``n=2.5``) an :class:`~gausspp.InputError`, NaN or inf a :class:`~gausspp.NonFiniteError`. A module
+    lists in ``INFINITE_OK`` the parameters that may be infinite (a bound that is absent).
+    """
+    if not isinstance(name, str) or name not in _MODULES:
+        raise UnknownNameError(f"scene {name!r} is unknown; available: {names()}")
+    builder = _builder(name)
+    infinite_ok = getattr(sys.modules[builder.__module__], "INFINITE_OK", ())
+    params = check_parameters(name, _parameters(builder), params, infinite_ok)
     try:
-        return _builder(name)(**params)
+        return builder(**params)
     except InputError:
         raise
     except (TypeError, ValueError) as exc:  # a parameter of the wrong kind, e.g. n='abc'

@@ -6,23 +6,24 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import array
 from ..errors import InputError, ShapeError
 
 
 def unit_vector(scene: str, name: str, value: Any) -> np.ndarray:
     """``value`` as a unit 3-vector, or a clear error naming the scene and the parameter."""
-    vec = np.asarray(value, dtype=float).ravel()
+    vec = array(scene, name, value).ravel()
     if vec.shape != (3,):
         raise ShapeError(f"{scene}: {name} must have 3 components, got {vec.size}")
     norm = np.linalg.norm(vec)
-    if not np.isfinite(norm) or norm == 0:
+    if norm == 0:
         raise InputError(f"{scene}: {name} must be a finite nonzero vector, got {vec.tolist()}")
     return vec / norm
 
 
 def inertia_matrix(scene: str, inertia: Any) -> np.ndarray:
     """A 3-vector of principal moments or a 3×3 tensor, as a 3×3 array (checked by the front end)."""
-    arr = np.asarray(inertia, dtype=float)
+    arr = array(scene, "inertia", inertia)
     if arr.shape == (3,):
         return np.diag(arr)
     if arr.shape != (3, 3):
@@ -30,9 +31,9 @@ def inertia_matrix(scene: str, inertia: Any) -> np.ndarray:
     return arr
 
 
-def on_plane(omega0: Any, l: np.ndarray) -> np.ndarray:
+def on_plane(scene: str, omega0: Any, l: np.ndarray) -> np.ndarray:
     """``omega0`` projected onto the plane ``(ω, l) = 0`` (``l`` a unit vector)."""
-    w0 = np.asarray(omega0, dtype=float).ravel()
+    w0 = array(scene, "omega0", omega0).ravel()
     if w0.shape != (3,):
-        raise ShapeError(f"omega0 must have 3 components, got {w0.size}")
+        raise ShapeError(f"{scene}: omega0 must have 3 components, got {w0.size}")
     return w0 - np.dot(w0, l) * l

@@ -1,13 +1,20 @@
-"""The Scene record: a model with its initial data, horizon and exact solution if known."""
+"""The Scene record (a model with its initial data, horizon and exact solution if known), and the check of
+every scene's parameters."""
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import ast
+import inspect
+import sys
+import textwrap
+from collections.abc import Callable, Collection
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
+from .._checks import number
+from ..errors import InputError, UnknownNameError
 from ..model import Model
 
 
@@ -42,3 +49,80 @@ class Scene:
     exact: Callable[[float], tuple[np.ndarray, np.ndarray]] | None
     description: str
     params: dict[str, Any] = field(default_factory=dict)
+
+
+# -- parameters: every scene's, checked by type in one place ---------------------------------------
+#: Annotations checked here; a parameter annotated otherwise (``Any``: vectors, tensors) is checked by its scene.
+_SIMPLE = {"float", "int", "str", "bool", "None"}
+
+
+def parameters(builder: Callable[..., Scene]) -> dict[str, inspect.Parameter]:
+    """The keyword parameters of a scene builder (those of its module's ``build`` behind a ``**params`` wrapper,
+    without the keywords the wrapper passes itself, as ``build(law="rate", **params)`` does)."""
+    sig, fixed = inspect.signature(builder), set()
+    if any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values()):
+        base = getattr(sys.modules[builder.__module__], "build", None)
+        if base is not None and base is not builder:
+            sig = inspect.signature(base)
+            try:
+                tree = ast.parse(textwrap.dedent(inspect.getsource(builder)))
+                fixed = {kw.arg for kw in ast.walk(tree) if isinstance(kw, ast.keyword) and kw.arg}
+            except (OSError, TypeError, SyntaxError):
+                pass
+    return {
+        k: p
+        for k, p in sig.parameters.items()
+        if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY) and k not in fixed
+    }
+
+
+def kinds(param: inspect.Parameter) -> set[str]:
+    """The parameter's type as a set of names (``"float | None"`` → {"float", "None"}); from the default if bare."""
+    ann = param.annotation
+    if ann is inspect.Parameter.empty:
+        default = param.default
+        return {type(default).__name__} if isinstance(default, (bool, int, float, str)) else set()
+    text = ann if isinstance(ann, str) else getattr(ann, "__name__", str(ann))
+    return {part.strip() for part in text.split("|")}
+
+
+def check_parameters(
+    scene: str, known: dict[str, inspect.Parameter], params: dict[str, Any], infinite_ok: Collection[str] = ()
+) -> dict[str, Any]:
+    """``params`` checked against the builder's parameters ``known``: names, and the types of those annotated
+    ``float``, ``int``, ``str``, ``bool`` (or ``… | None``); numbers come back as ``float``/``int``, finite
+    unless named in ``infinite_ok`` (a bound that may be absent), never NaN.
+
+    Raises
+    ------
+    UnknownNameError
+        A parameter the scene does not have (the message lists those it has).
+    InputError, ShapeError, NonFiniteError
+        A value of the wrong type (a string for a number, a vector for a scalar), or NaN/inf.
+    """
+    checked = {}
+    for key, value in params.items():
+        if key not in known:
+            raise UnknownNameError(f"scene {scene!r} has no parameter {key!r}; its parameters: {', '.join(known)}")
+        checked[key] = _typed(scene, key, value, kinds(known[key]), key in infinite_ok)
+    if "t_end" in checked and not checked["t_end"] > 0:
+        raise InputError(f"scene {scene!r}: t_end must be positive, got {params['t_end']!r}")
+    return checked
+
+
+def _typed(scene: str, key: str, value: Any, kind: set[str], infinite_ok: bool) -> Any:
+    if not kind or not kind <= _SIMPLE or (value is None and "None" in kind):
+        return value
+    words = {"float": "a finite number", "int": "an integer", "str": "a string", "bool": "True or False"}
+    words["None"] = "None"
+    if infinite_ok:
+        words["float"] = "a number"
+    wanted = " or ".join(words[k] for k in words if k in kind and not (k == "int" and "float" in kind))
+    where = f"scene {scene!r}: {key} must be {wanted}, got {value!r}"
+    if "float" in kind or "int" in kind:
+        return number(where, value, integer="float" not in kind, infinite_ok=infinite_ok)
+    if "str" in kind and isinstance(value, str):
+        return value
+    if "bool" in kind and isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise InputError(where)

@@ -58,7 +58,7 @@ def build(
         name="gyrostat",
         model=model,
         q0=np.array([1.0, 0.0, 0.0, 0.0]),
-        v0=on_plane(omega0, l_),
+        v0=on_plane("gyrostat", omega0, l_),
         lam0=lam,
         t_end=t_end,
         exact=None,

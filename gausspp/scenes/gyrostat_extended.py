@@ -101,7 +101,7 @@ def build(
     body = MassMatrix(n=4, A=mass_matrix, f=forces, energy=energy, kinematics=kinematics, nq=5)
     motor = Force(M=lambda q, v, t: [0, 0, 0, 1])
     model = Model(body, [Constraint(lambda q, v, t: ca.dot(v[:3], ca.DM(l_)), name="(ω, l) = 0", realization=motor)])
-    w0 = on_plane(omega0, l_)
+    w0 = on_plane("gyrostat-extended", omega0, l_)
     theta_dot0 = float(lam0) / Jr - float(w0 @ n_)
     return Scene(
         name="gyrostat-extended",

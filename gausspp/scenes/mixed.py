@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .._checks import array
 from ..constraints import Constraint
 from ..errors import InputError, ShapeError, UnknownNameError
 from ..frontends import Lagrangian
@@ -51,8 +52,8 @@ def build(
         raise UnknownNameError(f"mixed: law={law!r} is unknown; use one of {list(LAWS)}")
     if not m > 0:
         raise InputError(f"mixed: the mass must be positive, got m={m}")
-    direction = np.asarray(M, dtype=float).ravel()
-    if direction.shape != (2,) or not np.all(np.isfinite(direction)):
+    direction = array("mixed", "M", M).ravel()
+    if direction.shape != (2,):
         raise ShapeError(f"mixed: M must be a finite 2-vector (the force direction), got {M!r}")
     body = Lagrangian(
         n=2,

@@ -17,7 +17,7 @@ from ..constraints import Constraint
 from ..frontends import RigidBody
 from ..model import Model
 from ..realizations import Force
-from ._rigid import inertia_matrix, unit_vector
+from ._rigid import inertia_matrix, on_plane, unit_vector
 from ._scene import Scene
 
 
@@ -39,8 +39,7 @@ def build(
     body = RigidBody(inertia=I)
     servo = Force(M=lambda q, w, t: ca.DM(n_).T)
     model = Model(body, [Constraint(lambda q, w, t: ca.dot(w, ca.DM(l_)), name="(ω, l) = 0", realization=servo)])
-    w0 = np.asarray(omega0, float).ravel()
-    w0 = w0 - np.dot(w0, l_) * l_
+    w0 = on_plane("rigid-body-servo", omega0, l_)
     suslov = n is None or np.allclose(n_, l_)
     return Scene(
         name="rigid-body-servo",

@@ -34,6 +34,9 @@ from ..realizations import Force
 from . import crane
 from ._scene import Scene
 
+#: Parameters that may be infinite (checked by gausspp.scenes.get): no bound on the motor.
+INFINITE_OK = ("F_max",)
+
 
 def build(
     F_max: float = 12.0,

@@ -28,7 +28,7 @@ from ._rigid import inertia_matrix, on_plane, unit_vector
 def _plane(inertia: Any, l: Any, omega0: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     I = inertia_matrix("suslov", inertia)
     l_ = unit_vector("suslov", "l", l)
-    w0 = on_plane(omega0, l_)
+    w0 = on_plane("suslov", omega0, l_)
     return I, l_, w0, np.cross(l_, I @ l_)
 
 
