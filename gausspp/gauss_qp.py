@@ -38,6 +38,7 @@ is an error here as everywhere else.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -253,7 +254,8 @@ def _solve_stage(st: _Stage, backend: str, where: str, infeasible_ok: bool = Fal
     # satisfies the optimality conditions on the unit-sized problem: primal and dual residuals and duality gap
     if not sol.found and x is not None:
         try:
-            optimal = bool(sol.is_optimal(INACCURATE_KKT_TOL))
+            # (qpsolvers' residuals are inf for a point not marked found: judge the point itself)
+            optimal = bool(dataclasses.replace(sol, found=True).is_optimal(INACCURATE_KKT_TOL))
         except (TypeError, ValueError):  # no multipliers to judge with
             optimal = False
         if not optimal:
@@ -437,6 +439,7 @@ def solve_general(
     # rows that are independent here but not clearly so, or dependent rows that disagree, may be an artefact of
     # the state's distance from the manifold: decide at the nearest state on it
     ambiguous = bool(np.any((sines > DEPENDENCE_TOL) & (sines < CLEARLY_INDEPENDENT))) or gap > consistency_tol
+    ambiguous = ambiguous or kept.size < int(eq.sum())  # dropped rows: they must hold together near the state
     if ambiguous and reference is not None:
         on_manifold = reference() if callable(reference) else reference
         if on_manifold is not None:
@@ -458,23 +461,26 @@ def solve_general(
     lo, hi = p.lower.astype(float) / unit * cs, p.upper.astype(float) / unit * cs
     tracking_error = 0.0
     bounded = bool(np.any(np.isfinite(lo)) or np.any(np.isfinite(hi)))
-    rank_W = _svd_rank(ref.W / ref.cs)[3]  # dependent reaction columns, judged at the reference
+    # dependent reaction columns (judged at the reference, with the rows' dependence tolerance): their least-norm
+    # multiplier leaves out the directions that only the drift separates
+    sv = np.linalg.svd(ref.W / ref.cs, compute_uv=False)
+    rank_W = int(np.sum(sv > DEPENDENCE_TOL * max(float(sv[0]) if sv.size else 0.0, 1e-300)))
 
     scaled_u: list[np.ndarray] = []  # the last u-space stage's unknowns ũ (exact at the bounds)
 
     def compulsion(rows: np.ndarray, rhs: np.ndarray, infeasible_ok: bool = False) -> np.ndarray | None:
         """The whitened reaction ``w = W u`` of least ``‖w‖² = Z`` with ``rows · L⁻ᵀ w = rhs`` (rows of ``Jn``)."""
-        if rank_W == m or bounded:
+        if bounded:  # bounds act on u itself
             E, e, _gap, _rank = _compress(rows @ Ws, rhs)
             x = _solve_stage(_Stage(H, np.zeros(m), E, e, G, h, lo, hi, "compulsion"), solver, where, infeasible_ok)
             if x is None:
                 return None
             scaled_u.append(x)
             return Ws @ x
-        # dependent reaction columns and no bounds: the unknowns are the reaction itself, w = Q ξ with Q an
-        # orthonormal basis of range(W) at this state (Hessian I for every backend). Off the manifold the
-        # columns are independent by the drift; range(W) still holds the kept rows' reactions there, so the
-        # acceleration is exactly the minimal model's.
+        # no bounds: the unknowns are the reaction itself, w = Q ξ with Q an orthonormal basis of range(W) at this
+        # state (Hessian I for every backend, however close the reaction columns are to dependent). Off the
+        # manifold redundant columns are independent by the drift; range(W) still holds the kept rows'
+        # reactions there, so the acceleration is exactly the minimal model's.
         Q = _range_basis(Ws)
         E, e, _gap, _rank = _compress(rows @ Q, rhs)
         free = np.full(Q.shape[1], np.inf)

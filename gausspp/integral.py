@@ -176,6 +176,11 @@ def check_samples(t: np.ndarray, q: np.ndarray, v: np.ndarray, *, monotone: bool
         raise InputError(f"trajectory: t must be {order} with at least 2 samples")
 
 
+def _check_model(model: Any) -> None:
+    if not isinstance(model, Model):
+        raise InputError(f"model must be a gp.Model, got {short(model)}")
+
+
 def discretize(
     model: Model,
     trajectory: Any,
@@ -187,8 +192,7 @@ def discretize(
     constraint_tol: float = 1e-6,
 ) -> Discretized:
     """Evaluate ``R``, the metric and (20) on the nodes of a path (checked)."""
-    if not isinstance(model, Model):
-        raise InputError(f"model must be a gp.Model, got {short(model)}")
+    _check_model(model)
     if nodes is not None:
         nodes = positive("nodes", nodes, integer=True, hint=" (uniform nodes in the window, at least 5)")
     t, q, v, a = _path(trajectory)
@@ -454,6 +458,7 @@ def verify(
     say what was checked; a trajectory of which no piece can be checked raises
     :class:`~gausspp.InputError` with the reasons.
     """
+    _check_model(model)
     if method not in ("qp", "closed-form"):
         raise UnknownNameError(f"method={method!r} is unknown; use 'qp' or 'closed-form'")
     failed = getattr(trajectory, "status", "success") != "success"

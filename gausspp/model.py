@@ -23,6 +23,7 @@ from .errors import (
     InputError,
     MissingMultiplierError,
     NonFiniteError,
+    QPSolveError,
     RealizabilityError,
     ShapeError,
     UnknownNameError,
@@ -338,9 +339,15 @@ class Model:
             out = kernel(t, q, v, lam, _NO_STAB)
         except RuntimeError as exc:  # casadi refused to evaluate (e.g. a QP plugin given NaN data)
             raise evaluation_failed(exc, where, margin_error=self.margin_error) from None
+        except QPSolveError as exc:  # a nearly singular step the backend could not solve: redundant rows?
+            if solver == "direct" or self.k < 2:
+                raise
+            return self._redundant_step(t, q, v, lam, exc, backend)
         try:
             result = to_result(out, where, margin_warn=0.0, margin_error=self.margin_error)
-        except RealizabilityError as exc:
+        except (RealizabilityError, QPSolveError) as exc:
+            if isinstance(exc, QPSolveError) and (solver == "direct" or self.k < 2):
+                raise
             if solver == "direct":
                 exc.args = (f"{exc}{_DIRECT_NEEDS_INDEPENDENT_ROWS}",)
                 raise
@@ -358,7 +365,8 @@ class Model:
             if solution is not None and solution.redundant_rows > 0:
                 if solver == "direct":
                     raise RealizabilityError(
-                        f"the constraint rows are redundant on the constraint manifold at t={t:.6g} (margin here "
+                        f"the constraint rows of {', '.join(map(repr, self.names))} are redundant on the constraint "
+                        f"manifold at t={t:.6g} (margin here "
                         f"{result.margin:.3g}, by the state's distance from the manifold)"
                         + _DIRECT_NEEDS_INDEPENDENT_ROWS,
                         t=t,
@@ -375,7 +383,7 @@ class Model:
         """The compiled QP refused a singular step: if the rows are merely redundant, the general QP answers."""
         try:
             result, solution = self.general_step(t, q, v, lam, backend=_backend_name(backend))
-        except RealizabilityError as general:  # the compiled step's message names the constraints and the cause
+        except (RealizabilityError, QPSolveError) as general:  # the compiled step's message names the cause
             exc.args = (f"{exc} [the general QP: {general}]",)
             raise exc from None
         if solution.redundant_rows == 0:
