@@ -203,7 +203,7 @@ def _qp_backend_params() -> list[object]:
 def test_redundant_case_figures(cases: dict[str, Case]) -> None:
     c = cases["redundant constraints"]
     f = c.figures
-    # A. circle twice: direct names both constraints, redundancy and solver='qp'; every other QP backend answers
+    # A. circle twice: direct names both constraints, redundancy and solver='qp'; every QP backend answers
     assert f["duplicate_solvers"] >= 3 and f["duplicate_qp_backends"] == f["duplicate_solvers"] - 1
     assert f["duplicate_direct_clear_error"] == 1
     assert f["duplicate_qp_right_answers"] == f["duplicate_qp_backends"]
@@ -211,33 +211,43 @@ def test_redundant_case_figures(cases: dict[str, Case]) -> None:
     assert f["duplicate_max_multiplier_error"] <= _REDUNDANT_EXACT
     assert f["duplicate_least_norm_vs_pinv"] <= 1e-14  # λ_min·(1, 2)/5 is numpy's least-norm solution
     assert f["duplicate_cosine_min"] <= 1e-15  # the margin of a rank-deficient J is 0
-    # B. on the manifold: direct always the clear error, the default QP always the minimal model's answer
+    # B. on the manifold: direct always the clear error, every QP step the minimal model's answer
     assert f["manifold_direct_clear_errors"] == f["manifold_states"]
     assert f["manifold_default_qp_answers"] == f["manifold_states"]
     assert f["manifold_qp_backend_steps"] >= 4 * f["duplicate_qp_backends"]
-    assert f["manifold_qp_answers"] == f["manifold_qp_steps"] - f["unclear_manifold_outcomes"]
-    assert f["unclear_manifold_outcomes"] == 0
+    assert f["manifold_qp_answers"] == f["manifold_qp_steps"] and f["unclear_manifold_outcomes"] == 0
     assert f["manifold_max_error"] <= _REDUNDANT_EXACT and f["manifold_max_multiplier_error"] <= _REDUNDANT_EXACT
-    # C. off the manifold: an error, a warning, or the minimal model's answer (within δ) — never a silent wrong one
-    assert f["wrong_answers"] == 0
-    assert f["off_manifold_redundant_errors"] > 0 and f["off_manifold_warned_answers"] > 0
-    assert f["off_manifold_silent_answers"] > 0 and f["edge_silent_answers"] > 0
-    assert f["off_manifold_silent_error_over_drift"] <= 2.0 and f["off_manifold_silent_max_error"] <= 1e-7
-    # φ = 0: dependent rows with inconsistent right-hand sides — the clear redundancy error, which now also
-    # quotes the general QP's "contradict each other" (counted with the redundancy errors)
-    assert (
-        f["off_manifold_redundant_errors"]
-        + f["off_manifold_contradiction_errors"]
-        + f["off_manifold_other_errors"]
-        + f["off_manifold_warned_answers"]
-        + f["off_manifold_silent_answers"]
-        == f["off_manifold_steps"]
-    )
-    assert f["margin_over_drift_squared"] == pytest.approx(4.7e-3, rel=0.1)
-    # D. simulate with solver='direct' fails with project errors naming the redundancy
-    assert f["non_project_exceptions"] == 0
+    # C. off the manifold by δ: every answer is the minimal model's at the same state, within 1e-12 + 2δ (measured
+    # ≤ 0.88·δ), and direct always refuses; no wrong answer anywhere
+    assert f["wrong_answers"] == 0 and f["non_project_exceptions"] == 0
+    assert f["off_manifold_qp_steps"] == f["off_manifold_states"] * f["duplicate_qp_backends"]
+    assert f["off_manifold_qp_answers"] + f["off_manifold_qp_errors"] == f["off_manifold_qp_steps"]
+    assert f["off_manifold_error_over_drift"] <= redundant.OFF_PER_DRIFT
+    assert f["off_manifold_direct_refusals"] == f["off_manifold_states"]
+    # D. contradicting rows: the speeds (same row, different right-hand sides) always raise
+    assert f["contradiction_realizability_errors"] >= f["contradiction_steps"] / 2
+    # E. simulate: solver='direct' fails naming the redundancy; solver='qp' follows the minimal model (the compiled
+    # integrator refuses, naming the redundancy)
     assert f["simulate_redundancy_named"] == f["simulate_runs"]
-    assert c.verdict == (f["duplicate_qp_right_answers"] == f["duplicate_qp_backends"])
+    assert f["simulate_compiled_qp_refusals"] == 1 and f["simulate_qp_runs"] == f["simulate_runs"] - 1
+    assert f["simulate_qp_followed_minimal"] == f["simulate_qp_runs"]
+    # the verdict is the absence of problems; each problem quotes a reproduction
+    assert c.verdict == (not c.problems) and all("Repro" in p or "simulate" in p for p in c.problems)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="library problems (reported to the lead): consistent redundant rows off the manifold — quadprog refuses "
+    "the general QP's nearly singular u-space Hessian at 3 of 51 states, and solver='direct''s 'redundant on the "
+    "constraint manifold' message does not name the constraints; holonomic rows x = 0 and x = 0.5 (velocity and "
+    "acceleration rows equal) are answered, not refused",
+)
+def test_redundant_case_has_no_problems(cases: dict[str, Case]) -> None:
+    c = cases["redundant constraints"]
+    assert c.figures["off_manifold_qp_errors"] == 0, c.problems
+    assert c.figures["off_manifold_direct_errors_naming_constraints"] == c.figures["off_manifold_states"]
+    assert c.figures["contradiction_realizability_errors"] == c.figures["contradiction_steps"]
+    assert c.verdict and not c.problems
 
 
 def test_redundant_exact_duplicates_direct_raises_a_clear_realizability_error() -> None:
@@ -245,7 +255,7 @@ def test_redundant_exact_duplicates_direct_raises_a_clear_realizability_error() 
     q, v = redundant.circle_state()
     with pytest.raises(
         gp.RealizabilityError,
-        match=r"'circle', 'circle again'.*margin 0.*redundant.*solver='qp' returns the unique acceleration and "
+        match=r"'circle', 'circle again'.*margin.*redundant.*solver='qp' returns the unique acceleration and "
         r"the least-norm multiplier",
     ) as info:
         doubled.step(0.0, q, v, solver="direct")
@@ -285,27 +295,31 @@ def test_redundant_exact_duplicates_qp_answers_the_minimal_acceleration_and_leas
 
 
 def test_redundant_verdict(cases: dict[str, Case]) -> None:
-    assert cases["redundant constraints"].verdict, cases["redundant constraints"].observed
+    """The verdict is ✓ exactly when no problem was found (see test_redundant_case_has_no_problems)."""
+    c = cases["redundant constraints"]
+    assert c.verdict == (not c.problems), c.observed
 
 
-def test_redundant_constraints_never_give_a_silently_wrong_acceleration() -> None:
+def _off_manifold_tolerance(drift: float) -> float:
+    return redundant.OFF_FLOOR + redundant.OFF_PER_DRIFT * drift
+
+
+def test_redundant_constraints_off_the_manifold_qp_gives_the_minimal_acceleration() -> None:
+    """Default QP: the minimal model's acceleration at the same state, within 1e-12 + 2δ (measured ≤ 0.88·δ, round-off
+    where the rows are exactly dependent); direct refuses, pointing to solver='qp'."""
     scene, model = redundant.pendulum_with_distance()
-    for phi in (0.7, 0.0):  # φ = 0: the rows stay dependent off the manifold
-        for stretch in (0.0, 1e-10, 1e-8, 2e-8, 1e-6, 1e-4, 1e-2):  # on the manifold, and drifts off it
+    for phi in (0.7, 0.0, -2.0):  # φ = 0: the rows stay dependent off the manifold
+        for stretch in (0.0, 1e-10, 1e-8, 2e-8, 3e-8, 1e-6, 1e-4, 1e-2):  # on the manifold, and drifts off it
             q, v = redundant.pendulum_state(phi, 1.3, stretch=stretch)
             ref = scene.model.step(0.0, q, v, solver="direct").a
-            for solver in ("direct", "qp"):
-                with warnings.catch_warnings(record=True) as caught:
-                    warnings.simplefilter("always")
-                    try:
-                        res = model.step(0.0, q, v, solver=solver)
-                    except gp.GaussppError:
-                        continue  # a clear error is acceptable
-                err = np.max(np.abs(res.a - ref)) / np.max(np.abs(ref))
-                if stretch == 0.0:
-                    assert err <= _REDUNDANT_EXACT, (phi, solver)
-                elif not _realizability_warned(caught):  # no further off than the state's own drift
-                    assert err <= min(1e-7, 2.0 * stretch), (phi, stretch, solver, err)
+            with pytest.raises(gp.RealizabilityError, match=r"redundant.*solver='qp'"):
+                model.step(0.0, q, v, solver="direct")
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                res = model.step(0.0, q, v, solver="qp")
+            assert not _realizability_warned(caught), (phi, stretch)
+            err = np.max(np.abs(res.a - ref)) / np.max(np.abs(ref))
+            assert err <= (_REDUNDANT_EXACT if stretch == 0.0 else _off_manifold_tolerance(stretch)), (phi, stretch)
 
 
 def test_redundant_constraints_on_the_manifold_direct_raises_and_qp_answers() -> None:
@@ -322,40 +336,67 @@ def test_redundant_constraints_on_the_manifold_direct_raises_and_qp_answers() ->
         assert np.max(np.abs(res.u - least_norm)) <= _REDUNDANT_EXACT * np.max(np.abs(least_norm)), phi
 
 
-def test_redundant_rows_that_contradict_each_other_raise() -> None:
-    _, model = redundant.pendulum_with_distance()
-    # φ = 0, x stretched: the distance row stays parallel to pin-x's, its right-hand side disagrees
-    q, v = redundant.pendulum_state(0.0, 1.3, stretch=1e-4)
-    with pytest.raises(gp.RealizabilityError, match=r"'pin-x', 'pin-z', 'distance'.*redundant"):
-        model.step(0.0, q, v, solver="direct")
-    with pytest.raises(gp.RealizabilityError, match=r"dependent and contradict each other"):
-        model.step(0.0, q, v, solver="qp")
-    # on the manifold with a velocity across it: the second-order right-hand sides disagree by ε²
-    q, v = redundant.pendulum_state(0.7, 1.3)
-    v = v + 1e-2 * np.array([math.cos(0.7), math.sin(0.7), 0.0])
-    with pytest.raises(gp.RealizabilityError, match=r"dependent and contradict each other"):
-        model.step(0.0, q, v, solver="qp")
+@pytest.mark.parametrize("backend", _qp_backend_params())
+def test_redundant_rows_that_contradict_each_other_raise(backend: str | None) -> None:
+    """``v₁ − v₀ = 0`` and ``v₁ − v₀ − t = 0``: the same row, acceleration-level right-hand sides 0 and 1."""
+    models = redundant.contradicting_models()
+    for name in ("speeds at t = 0", "speeds at t = 0.5"):
+        model, q, v, t = models[name]
+        with pytest.raises(gp.RealizabilityError, match=r"'equal speeds', 'speeds apart'.*redundant.*solver='qp'"):
+            model.step(t, q, v, solver="direct")
+        with warnings.catch_warnings(), stability._case.quiet_c_output():
+            warnings.simplefilter("ignore")  # Clarabel warns about its own numerical error
+            with pytest.raises(gp.RealizabilityError, match=r"dependent and contradict each other") as info:
+                model.step(t, q, v, solver="qp", backend=backend)
+        assert info.value.t == t and "equal speeds" in info.value.constraint + str(info.value)
 
 
-def test_redundant_nearly_dependent_rows_qp_error_names_the_redundancy() -> None:
-    _, model = redundant.pendulum_with_distance()
-    q, v = redundant.pendulum_state(0.7, 1.3, stretch=1e-6)
-    with pytest.raises(gp.RealizabilityError, match=r"'pin-x', 'pin-z', 'distance'.*redundant"):
-        model.step(0.0, q, v, solver="qp")
+@pytest.mark.xfail(
+    strict=True,
+    raises=AssertionError,
+    reason="library problem (reported): holonomic rows that contradict only at the position level are answered — "
+    "the nearest state on the manifold, where that is checked, is computed only when the rows are ambiguous",
+)
+def test_redundant_positions_that_contradict_each_other_raise() -> None:
+    model, q, v, t = redundant.contradicting_models()["positions at x = 0.25"]
+    with pytest.raises(gp.RealizabilityError, match=r"'x at 0', 'x at 0.5'.*redundant"):
+        model.step(t, q, v, solver="direct")
+    try:
+        res = model.step(t, q, v, solver="qp")
+    except gp.RealizabilityError as exc:
+        assert "contradict" in str(exc)
+    else:
+        raise AssertionError(f"x = 0 and x = 0.5 at x = 0.25: answered a = {res.a}")
 
 
-def test_redundant_constraints_with_projection_fail_with_project_errors() -> None:
+def test_redundant_nearly_dependent_rows_qp_answers_the_minimal_model() -> None:
+    """φ = 0.7, 1e-6 off the manifold: the three rows are independent there (margin ∝ δ²) — the QP keeps the pins
+    (decided on the manifold) and answers the minimal model's acceleration; direct refuses the redundant rows."""
     scene, model = redundant.pendulum_with_distance()
-    for method in ("rk4-compiled", "DOP853"):
-        try:
-            gp.simulate(model, scene.q0, scene.v0, 1.0, dt=0.01, method=method, stabilize="project")
-        except gp.GaussppError:
-            continue
-        except Exception as exc:  # noqa: BLE001 - what this test is about
-            raise AssertionError(f"{method}: not a project error: {exc!r}") from None
-    q, v = redundant.pendulum_state(0.0, 0.0, stretch=1e-3)  # off the manifold: the projection cannot proceed
+    q, v = redundant.pendulum_state(0.7, 1.3, stretch=1e-6)
+    with pytest.raises(gp.RealizabilityError, match=r"redundant.*solver='qp'") as info:
+        model.step(0.0, q, v, solver="direct")
+    assert all(name in info.value.constraint for name in ("pin-x", "pin-z", "distance"))
+    ref = scene.model.step(0.0, q, v, solver="direct").a
+    res = model.step(0.0, q, v, solver="qp")
+    assert res.solver.startswith("gauss-qp:")
+    assert np.max(np.abs(res.a - ref)) <= _off_manifold_tolerance(1e-6) * np.max(np.abs(ref))
+
+
+def test_redundant_constraints_simulate_direct_refuses_and_qp_follows_the_minimal_model() -> None:
+    scene, model = redundant.pendulum_with_distance()
+    for method in ("rk4", "rk4-compiled", "DOP853"):
+        with pytest.raises(gp.RealizabilityError, match=r"redundant"):
+            gp.simulate(model, scene.q0, scene.v0, 1.0, dt=0.01, method=method, solver="direct", stabilize="project")
+    q, v = redundant.pendulum_state(0.0, 0.0, stretch=1e-3)  # off the manifold: the projection needs the QP's rows
     with pytest.raises(gp.InitialDataError, match=r"projecting .* failed .*redundant"):
-        gp.simulate(model, q, v, 1.0, dt=0.01, stabilize="project")
+        gp.simulate(model, q, v, 1.0, dt=0.01, solver="direct", stabilize="project")
+    traj = gp.simulate(model, q, v, 0.5, dt=0.01, stabilize="project")
+    ref = gp.simulate(scene.model, q, v, 0.5, dt=0.01, stabilize="project")
+    assert traj.success and traj.q.shape == ref.q.shape
+    assert np.max(np.abs(traj.q - ref.q)) <= 1e-8  # measured 1e-10 (relative, over 1 s)
+    with pytest.raises(gp.InputError, match=r"redundant"):  # the compiled integrator has no general QP
+        gp.simulate(model, scene.q0, scene.v0, 1.0, dt=0.01, method="rk4-compiled", stabilize="project")
 
 
 # -- 6. initial data off the constraint -------------------------------------------------------------
