@@ -121,8 +121,9 @@ def _margin_failure(model: Model, times: np.ndarray, bounds: np.ndarray) -> tupl
         return None
     i = int(np.argmax(certain))
     return i, RealizabilityError(
-        f"the realizability margin falls below margin_error={model.margin_error:g} at t={times[i]:.6g} (at most "
-        f"{bounds[i] * np.sqrt(model.k):.3g}; constraints {', '.join(repr(n) for n in model.names)}): the "
+        f"the realizability margin falls below margin_error={model.margin_error:g} at t={times[i]:.6g} ("
+        f"{f'at most {bounds[i] * np.sqrt(model.k):.3g}' if np.isfinite(bounds[i]) else 'not finite'}; "
+        f"constraints {', '.join(repr(n) for n in model.names)}): the "
         "realization cannot keep the constraint there; the run stops",
         t=float(times[i]),
         constraint=", ".join(model.names),
@@ -165,14 +166,14 @@ def integrate_compiled(
     except RuntimeError:  # a QP plugin refused non-finite data somewhere: redo step by step to keep the prefix
         Y, bounds = _step_by_step(step, y0, times, s)
     failure: Exception | None = None
-    low = _margin_failure(model, times[: bounds.size], bounds)
-    if low is not None:  # the step from a state with a vanishing margin is not kept, nor anything after it
-        Y, times, failure = Y[: low[0] + 1], times[: low[0] + 1], low[1]
     finite = np.isfinite(Y).all(axis=1)
-    if failure is None and (Y.shape[0] < times.size or not finite.all()):
+    if Y.shape[0] < times.size or not finite.all():
         first = int(np.argmin(finite)) if not finite.all() else Y.shape[0]
         Y, times = Y[:first], times[:first]
         failure = _diagnose(model, solver, backend, times[-1], Y[-1], times[-1] + dt)
+    low = _margin_failure(model, times[: bounds.size], bounds[: times.size])
+    if low is not None and low[0] > 0:  # a state whose margin vanished is not kept, nor anything after it
+        Y, times, failure = Y[: low[0]], times[: low[0]], low[1]
     if np.isscalar(record):
         keep = _record_indices(times.size - 1, record)
     else:  # after a failure only the requested times that were reached can be kept

@@ -523,10 +523,10 @@ class Model:
         ``None`` when the state is on the manifold already (decide there). See :meth:`_nearest_on_manifold`.
         """
         q_ref, v_ref = self._nearest_on_manifold(t, q, v, lam)
-        if np.array_equal(q_ref, q) and np.array_equal(v_ref, v):
-            return None
         A, f, r0, J, phi, D, Phi, g, _qd, _e, _p, _gc, Jc, phic, _gdc = self._general_data(t, q_ref, v_ref, lam, stab)
         self._check_reachable(t, J.reshape(self.k, self.nv), Phi.ravel(), g.ravel(), q_ref, v_ref)
+        if np.array_equal(q_ref, q) and np.array_equal(v_ref, v):
+            return None
         if not (np.all(np.isfinite(A)) and np.all(np.isfinite(f + r0))):
             return None
         try:
@@ -556,7 +556,8 @@ class Model:
         else:
             return
         raise RealizabilityError(
-            f"the constraint rows are dependent and contradict each other at t={t:.6g}: no state near this one "
+            f"the constraint rows of {', '.join(map(repr, self.names))} are dependent and contradict each other at "
+            f"t={t:.6g}: no state near this one "
             f"satisfies them all (row {self.row_names[worst]!r} stays off by {size:.2g} relative to the state's size) "
             "— the redundant rows describe different constraints; remove one of them",
             t=t,

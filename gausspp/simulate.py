@@ -508,6 +508,12 @@ def _jacobian(rhs: AnyRightHandSide) -> Any:
 
 
 # -- recording -------------------------------------------------------------------------------
+def _replaceable(failure: Exception | None) -> bool:
+    """No failure yet, or one that a margin lost at earlier samples explains (a realizability failure, or the
+    divergence that follows a step across a singular state)."""
+    return failure is None or isinstance(failure, (RealizabilityError, NonFiniteError, IntegrationError))
+
+
 def _record(
     model: Model,
     rhs: AnyRightHandSide,
@@ -547,7 +553,7 @@ def _record(
         kept > 1 and model.m == model.k and checked
     ):  # det S is continuous along a motion: a sign change means S was singular
         flips = np.flatnonzero(np.sign(np.linalg.det(S[1:])) * np.sign(np.linalg.det(S[:-1])) < 0)
-        if flips.size and record_failure is None:
+        if flips.size and _replaceable(record_failure):  # a margin lost earlier explains a later failure
             i = int(flips[0])
             record_failure = RealizabilityError(
                 f"the realizability margin passed through zero between t={ts[i]:.6g} and t={ts[i + 1]:.6g} "
@@ -560,7 +566,7 @@ def _record(
             margin = margin[: i + 1]
             ts, ys, kept = ts[: i + 1], ys[: i + 1], i + 1
             cols = {k: v[: i + 1] for k, v in cols.items()}
-    touch = _margin_touches_zero(ts, margin, model.margin_error) if record_failure is None and checked else None
+    touch = _margin_touches_zero(ts, margin, model.margin_error) if _replaceable(record_failure) and checked else None
     if touch is not None:  # a minimum of the margin between samples reaches zero: the step went past it
         i, t_min = touch
         warnings.warn(

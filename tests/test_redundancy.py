@@ -155,21 +155,11 @@ def off_the_manifold(draw: st.DrawFn, family: Family) -> tuple[float, np.ndarray
     return (t, *perturbed(q0, v0, delta, e_q, e_v), delta)
 
 
-#: Known library problem (reported): on the rows dependent on the manifold only, at drifts where a dropped row's
-#: sine is below DEPENDENCE_TOL but the reaction columns' smallest singular value is above RANK_TOL, the general QP
-#: solves the compulsion stage in u with a Hessian WᵀW of condition ~1e18, which quadprog refuses ("matrix P is not
-#: positive definite"). Only that refusal is expected: a wrong answer still fails.
-_QUADPROG_REFUSES = pytest.mark.xfail(
-    raises=gp.QPSolveError, strict=False, reason="general QP: u-space compulsion stage with a nearly singular WᵀW"
-)
-
-
 def _params() -> list[object]:
     params = []
     for name in FAMILIES:
         for backend in BACKENDS:
-            marks = _QUADPROG_REFUSES if backend == "qpsolvers:quadprog" and "distance" in name else ()
-            params.append(pytest.param(name, backend, marks=marks, id=f"{name}-{backend}"))
+            params.append(pytest.param(name, backend, id=f"{name}-{backend}"))
     return params
 
 
@@ -266,7 +256,6 @@ _REFUSED = [
 ]
 
 
-@pytest.mark.xfail(raises=gp.QPSolveError, strict=False, reason="a backend refuses consistent redundant rows")
 @pytest.mark.parametrize("name, backend, t, q, v", _REFUSED)
 def test_recorded_refusals_give_the_minimal_acceleration(
     families: dict[str, Family], name: str, backend: str, t: float, q: list[float], v: list[float]

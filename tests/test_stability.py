@@ -235,13 +235,6 @@ def test_redundant_case_figures(cases: dict[str, Case]) -> None:
     assert c.verdict == (not c.problems) and all("Repro" in p or "simulate" in p for p in c.problems)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="library problems (reported to the lead): consistent redundant rows off the manifold — quadprog refuses "
-    "the general QP's nearly singular u-space Hessian at 3 of 51 states, and solver='direct''s 'redundant on the "
-    "constraint manifold' message does not name the constraints; holonomic rows x = 0 and x = 0.5 (velocity and "
-    "acceleration rows equal) are answered, not refused",
-)
 def test_redundant_case_has_no_problems(cases: dict[str, Case]) -> None:
     c = cases["redundant constraints"]
     assert c.figures["off_manifold_qp_errors"] == 0, c.problems
@@ -351,12 +344,6 @@ def test_redundant_rows_that_contradict_each_other_raise(backend: str | None) ->
         assert info.value.t == t and "equal speeds" in info.value.constraint + str(info.value)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="library problem (reported): holonomic rows that contradict only at the position level are answered — "
-    "the nearest state on the manifold, where that is checked, is computed only when the rows are ambiguous",
-)
 def test_redundant_positions_that_contradict_each_other_raise() -> None:
     model, q, v, t = redundant.contradicting_models()["positions at x = 0.25"]
     with pytest.raises(gp.RealizabilityError, match=r"'x at 0', 'x at 0.5'.*redundant"):
