@@ -36,6 +36,7 @@ from .errors import (
     UnknownNameError,
 )
 from .model import Model
+from .progress import Progress
 from .trajectory import Trajectory
 
 
@@ -215,6 +216,8 @@ def simulate(
 # -- set-up ----------------------------------------------------------------------------------
 #: A run with more fixed steps than this warns up front (:class:`~gausspp.LongRunWarning`) with the count.
 LONG_RUN_STEPS = 1_000_000
+#: A long fixed-step run looks at the clock every this many steps (and reports at most every 2 s).
+PROGRESS_EVERY = 500
 #: A run with more steps than this is refused: it would run for days and its samples would not fit in memory.
 MAX_STEPS = 10**10
 #: The states a run keeps (every step on the compiled lane, the recorded ones elsewhere) may take this many bytes.
@@ -261,7 +264,9 @@ def _check_step_count(meth: _methods.Method, model: Model, t0: float, t_end: flo
         )
     if steps > LONG_RUN_STEPS:
         warnings.warn(
-            f"{what} (method {meth.name!r}): this run will take long; enlarge dt or shorten t_end"
+            f"{what} (method {meth.name!r}): this run will take long"
+            + (" (its progress and the time left are shown on standard error)" if meth.lane == "python" else "")
+            + "; enlarge dt or shorten t_end"
             + (", or use an adaptive or compiled method (DOP853, rk4-compiled)" if meth.lane == "python" else ""),
             LongRunWarning,
             stacklevel=3,
@@ -394,7 +399,10 @@ def _fixed_step(
     nq, nv, nl = model.nq, model.nv, model.n_lam
     y, slot, t = y0.copy(), 0, t0
     failure = None
+    progress = Progress(n_steps, f"gausspp.simulate ({meth.name})", enabled=n_steps > LONG_RUN_STEPS)
     for i in range(n_steps + 1):
+        if i % PROGRESS_EVERY == 0:
+            progress.update(i)
         if slot < keep.size and keep[slot] == i:
             ts[slot], ys[slot] = t, y
             slot += 1
@@ -418,6 +426,7 @@ def _fixed_step(
         except GaussppError as exc:
             failure = exc
             break
+    progress.close()
     return ts[:slot], ys[:slot], i, failure
 
 
