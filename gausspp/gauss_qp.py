@@ -384,13 +384,16 @@ def solve_general(
     backend: str | None = None,
     consistency_tol: float = CONSISTENCY_TOL,
     reference: GaussProblem | Callable[[], GaussProblem | None] | None = None,
+    near_manifold: bool = False,
 ) -> GaussSolution:
     """Solve the general Gauss step (see the module docstring) with a qpsolvers ``backend``.
 
     ``reference``: the same problem at the nearest state on the constraint manifold, or a function
     that builds it (called only when the rows at ``p`` are nearly but not clearly dependent, or
-    disagree). Which bilateral rows are redundant, and whether they agree, is decided there
-    (:mod:`gausspp.redundancy`); ``p`` is then solved with the kept rows. ``consistency_tol``: how
+    disagree, or rows were dropped and ``near_manifold`` is false). Which bilateral rows are redundant,
+    and whether they agree, is decided there (:mod:`gausspp.redundancy`); ``p`` is then solved with the
+    kept rows. ``near_manifold``: the state itself satisfies the constraints to within the caller's
+    tolerance, so dropped rows need no reference to show that they can hold together. ``consistency_tol``: how
     far (relative) dependent rows may disagree at the reference before it is an error.
 
     Raises
@@ -439,7 +442,8 @@ def solve_general(
     # rows that are independent here but not clearly so, or dependent rows that disagree, may be an artefact of
     # the state's distance from the manifold: decide at the nearest state on it
     ambiguous = bool(np.any((sines > DEPENDENCE_TOL) & (sines < CLEARLY_INDEPENDENT))) or gap > consistency_tol
-    ambiguous = ambiguous or kept.size < int(eq.sum())  # dropped rows: they must hold together near the state
+    # dropped rows must hold together near the state: checked at the reference unless the state is a witness
+    ambiguous = ambiguous or (kept.size < int(eq.sum()) and not near_manifold)
     if ambiguous and reference is not None:
         on_manifold = reference() if callable(reference) else reference
         if on_manifold is not None:

@@ -480,7 +480,12 @@ class Model:
         m = self.m
         problem = self._gauss_problem(t, A, a0, J, phi, D, Jc, phic[closed], closed)
         sol = solve_general(
-            problem, backend, consistency_tol, reference=lambda: self._reference_problem(t, q, v, lam, stab, closed)
+            problem,
+            backend,
+            consistency_tol,
+            reference=lambda: self._reference_problem(t, q, v, lam, stab, closed),
+            # a state on the constraints to REACH_TOL is itself the witness that dependent rows hold together
+            near_manifold=self.k == 0 or self._off_manifold(J, Phi, g, q, v)[0] <= REACH_TOL,
         )
         u = sol.u[:m]
         contact_force = np.zeros(len(self.contact_row_names))
@@ -535,25 +540,29 @@ class Model:
             return None
         return self._gauss_problem(t, A, a0, J, phi, D, Jc, phic.ravel()[closed], closed)
 
-    def _check_reachable(
-        self, t: float, J: np.ndarray, Phi: np.ndarray, g: np.ndarray, q: np.ndarray, v: np.ndarray
-    ) -> None:
-        """Raise if the nearest state found is not on the constraints: then they contradict each other.
+    def _off_manifold(
+        self, J: np.ndarray, Phi: np.ndarray, g: np.ndarray, q: np.ndarray, v: np.ndarray
+    ) -> tuple[float, int]:
+        """How far the state is from the constraints, and the row farthest off.
 
-        Each row's residual is measured as a distance in coordinates (``|g_i| / ‖J_i‖``, ``|Φ_i| / ‖J_i‖``)
-        against :data:`REACH_TOL` of the state's size.
+        Each row's residual is a distance in coordinates (``|g_i| / ‖J_i‖``, ``|Φ_i| / ‖J_i‖``) relative to the
+        state's size; compared with :data:`REACH_TOL`.
         """
+        J = J.reshape(self.k, self.nv)
         norms = np.linalg.norm(J, axis=1)
         norms[norms == 0] = 1.0
         rows = self.holonomic_rows
-        off_q = np.abs(g[rows]) / norms[rows] / (1.0 + np.max(np.abs(q)))
-        off_v = np.abs(Phi) / norms / (1.0 + np.max(np.abs(v)))
-        worst = int(np.argmax(off_v)) if off_v.size else 0
-        if off_q.size and off_q.max() > REACH_TOL:
-            worst, size = rows[int(np.argmax(off_q))], float(off_q.max())
-        elif off_v.size and off_v.max() > REACH_TOL:
-            size = float(off_v.max())
-        else:
+        off = np.abs(Phi.ravel()) / norms / (1.0 + np.max(np.abs(v), initial=0.0))
+        off[rows] = np.maximum(off[rows], np.abs(g.ravel()[rows]) / norms[rows] / (1.0 + np.max(np.abs(q))))
+        worst = int(np.argmax(off)) if off.size else 0
+        return (float(off[worst]) if off.size else 0.0), worst
+
+    def _check_reachable(
+        self, t: float, J: np.ndarray, Phi: np.ndarray, g: np.ndarray, q: np.ndarray, v: np.ndarray
+    ) -> None:
+        """Raise if the nearest state found is not on the constraints: then they contradict each other."""
+        size, worst = self._off_manifold(J, Phi, g, q, v)
+        if size <= REACH_TOL:
             return
         raise RealizabilityError(
             f"the constraint rows of {', '.join(map(repr, self.names))} are dependent and contradict each other at "

@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+from pathlib import Path
+from typing import NamedTuple
+
 import numpy as np
 import pytest
 
@@ -9,3 +14,20 @@ import pytest
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(20261121)
+
+
+class DemoRun(NamedTuple):
+    stdout: str
+    stderr: str
+    returncode: int
+    out: Path
+
+
+@pytest.fixture(scope="session")
+def demo_run(tmp_path_factory: pytest.TempPathFactory) -> DemoRun:
+    """`gausspp demo` by the real entry point, once per test session (it takes about a minute)."""
+    out = tmp_path_factory.mktemp("demo")
+    result = subprocess.run(
+        [sys.executable, "-m", "gausspp.cli", "demo", "--out", str(out)], capture_output=True, text=True, timeout=900
+    )
+    return DemoRun(result.stdout, result.stderr, result.returncode, out)

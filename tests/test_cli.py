@@ -129,13 +129,12 @@ def test_report_for_one_scene(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     assert (tmp_path / "work_precision.csv").stat().st_size > 0
 
 
-def test_demo_by_the_real_entry_point(tmp_path: Path) -> None:
-    result = _command("demo", "--out", str(tmp_path))
-    assert result.returncode == 0, result.stderr
-    assert "Every scene" in result.stdout
+def test_demo_by_the_real_entry_point(demo_run) -> None:
+    assert demo_run.returncode == 0, demo_run.stderr
+    assert "Every scene" in demo_run.stdout
     for name in gp.scenes.names("equality"):
-        assert f"\n{name} " in result.stdout
-    pngs = sorted(tmp_path.glob("*.png"))  # the teaching figures
+        assert f"\n{name} " in demo_run.stdout
+    pngs = sorted(demo_run.out.glob("*.png"))  # the teaching figures
     assert len(pngs) == 4 and all(p.read_bytes()[:4] == b"\x89PNG" and p.stat().st_size > 10_000 for p in pngs)
 
 

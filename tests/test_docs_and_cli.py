@@ -28,15 +28,16 @@ def test_example_runs(script: str, tmp_path: Path) -> None:
         assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 1000
 
 
-def test_demo_table(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
+def test_demo_table(demo_run) -> None:
     import gausspp as gp
 
-    assert cli.main(["demo", "--out", str(tmp_path)]) == 0
-    out = capsys.readouterr().out
+    assert demo_run.returncode == 0, demo_run.stderr
+    out = demo_run.stdout
     first = out.split("Every scene")[0].splitlines()
     step_rows = [line for line in first if line.startswith(("two-masses", "rigid-body-servo"))]
     assert len(step_rows) == 8
-    assert all(float(r.split()[-2]) < 1e-12 for r in step_rows if " qp " in r)  # QP vs direct column
+    assert all(float(r.split()[-3]) < 1e-12 for r in step_rows if " qp " in r)  # QP vs direct, raw answers
+    assert all(float(r.split()[-2]) < 1e-12 for r in step_rows)  # each route vs the independent reference
     scene_rows = {line.split()[0]: line.split() for line in out.split("verified by (23)")[1].splitlines()[3:] if line}
     for name in gp.scenes.names("equality"):  # every scene: QP ≡ direct along the run, and a motion by (23)
         row = scene_rows[name]
