@@ -21,8 +21,8 @@ no answer (``S = J A⁻¹ Jᵀ`` is singular). ``third_row`` picks it:
 * ``"distance"`` — ``|C − P|² − l3² = 0`` with ``C = l1 e(φ1) + l2 e(φ2)``: the rocker's length,
   implied by the closure *on* the constraint manifold (dependent there only). Off it — e.g. at the
   stages of a Runge–Kutta step — the three rows are independent but nearly dependent and
-  contradict each other by the drift: the step refuses with a :class:`~gausspp.RealizabilityError`
-  rather than answer. Step it on the manifold; simulate the ``"oblique"`` variant.
+  contradict each other by the drift; the step decides the redundancy at the nearest state on the
+  manifold (:mod:`gausspp.redundancy`) and returns the minimal model's acceleration.
 
 Gauss's principle still fixes the acceleration uniquely; ``solver="qp"`` returns it with the
 least-norm multiplier (:mod:`gausspp.gauss_qp`), ``solver="direct"`` refuses with a
