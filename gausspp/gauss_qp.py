@@ -368,9 +368,9 @@ def _kept_rows(ref: _Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndar
     eq_rows = np.flatnonzero(eq)
     kept_local, sines = independent_rows(ref.Jn[eq_rows])
     kept = eq_rows[kept_local]
-    dropped = np.setdiff1d(eq_rows, kept)
     gap = 0.0
-    if dropped.size:
+    if kept.size < eq_rows.size:
+        dropped = eq_rows[np.isin(np.arange(eq_rows.size), kept_local, invert=True)]
         if kept.size:  # each dropped row as a combination of the kept ones; its right-hand side must follow
             combo = np.linalg.lstsq(ref.Jn[kept].T, ref.Jn[dropped].T, rcond=None)[0]
             gap = float(np.max(np.abs(ref.r[dropped] - combo.T @ ref.r[kept])))

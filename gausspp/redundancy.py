@@ -20,6 +20,8 @@ motion of the minimal model made of the kept rows — at any drift, not only to 
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 #: A row whose normalized residual against the rows kept before it (sine of the angle between the row
@@ -47,23 +49,23 @@ def independent_rows(rows: np.ndarray, tol: float = DEPENDENCE_TOL) -> tuple[np.
     sines : (k,) array
         Each row's distance to the span of the rows kept before it (its sine against them).
     """
-    k = rows.shape[0]
-    basis: list[np.ndarray] = []
+    k, n = rows.shape
+    basis = np.zeros((min(k, n), n))  # orthonormal rows spanning the kept rows
     kept: list[int] = []
     sines = np.zeros(k)
     for i in range(k):
-        r = rows[i].astype(float).copy()
-        size = float(np.linalg.norm(r))
+        r = np.asarray(rows[i], dtype=float)
+        size = math.sqrt(float(r @ r))
         if size == 0:
             continue
-        r /= size
+        r = r / size
+        B = basis[: len(kept)]
         for _ in range(2):  # Gram–Schmidt twice: orthogonal to round-off even for nearly dependent rows
-            for b in basis:
-                r -= (b @ r) * b
-        sines[i] = float(np.linalg.norm(r))
-        if sines[i] > tol:
+            r = r - B.T @ (B @ r)
+        sines[i] = math.sqrt(float(r @ r))
+        if sines[i] > tol and len(kept) < n:
+            basis[len(kept)] = r / sines[i]
             kept.append(i)
-            basis.append(r / sines[i])
     return np.array(kept, dtype=int), sines
 
 
