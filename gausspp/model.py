@@ -362,7 +362,7 @@ class Model:
                 general, solution = self.general_step(t, q, v, lam, backend=_backend_name(backend))
             except GaussppError:
                 general, solution = None, None
-            if solution is not None and solution.redundant_rows > 0:
+            if general is not None and solution is not None and solution.redundant_rows > 0:
                 if solver == "direct":
                     raise RealizabilityError(
                         f"the constraint rows of {', '.join(map(repr, self.names))} are redundant on the constraint "

@@ -253,7 +253,7 @@ def _check_step_count(meth: _methods.Method, model: Model, t0: float, t_end: flo
     if meth.lane == "compiled" and not meth.adaptive:  # the compiled RK keeps every step's state
         kept = steps + 1
     elif np.isscalar(record):  # every record-th fixed step; every accepted step of an adaptive method
-        kept = steps + 1 if meth.adaptive else steps / record + 2
+        kept = steps + 1 if meth.adaptive else steps / float(record) + 2  # type: ignore[arg-type]
     else:
         kept = len(record)
     if kept * width > MAX_KEPT_BYTES:
