@@ -73,9 +73,6 @@ class RightHandSide:
         return np.array(self.evaluate(t, y)["qdot"])
 
 
-#: Along a simulation, redundant rows disagree by the drift (the integration error): up to this relative
-#: inconsistency they are solved in the least-squares sense (a single step allows only 1e-8).
-DRIFT_CONSISTENCY_TOL = 1e-5
 
 
 class GeneralRightHandSide:
@@ -116,7 +113,6 @@ class GeneralRightHandSide:
             y[sl],
             self.backend,
             self.stab if stabilized else np.zeros(2),
-            consistency_tol=DRIFT_CONSISTENCY_TOL,
         )
         return {
             "a": res.a,
