@@ -24,15 +24,19 @@ convex QP, so every answer is exact (no penalty weight to tune):
    constraint best. The optimal error ``e*`` is unique; it is zero exactly when the bounds
    allow the constraint to be kept, and then the motion is the unbounded one.
 2. **compulsion**: minimize ``Z`` with the tracked rows fixed at ``J_s a = φ_s + e*``.
-   The acceleration is unique (``Z`` is strictly convex in ``a``).
+   The acceleration is unique (``Z`` is strictly convex in ``a``). Without bounds the unknowns
+   are the whitened reaction itself, ``w = W u = Q ξ`` with ``Q`` an orthonormal basis of
+   ``range W`` (Hessian ``I``), however close the reaction columns are to dependent.
 3. **least norm** (only when ``W`` has dependent columns, e.g. redundant constraint rows):
    among the reactions that give that acceleration, the one of least ``‖u‖``.
 
-Dependent equality rows are compressed to an orthonormal basis of their span (SVD) before
-the QP sees them; that is the documented rule for redundant constraints: if the rows are
-consistent, the unique acceleration and the least-norm multiplier; if not, an error.
-A realization that cannot keep its constraint (``rank S < rank J``: conditions (12)/(16))
-is an error here as everywhere else.
+Redundant bilateral rows (:mod:`gausspp.redundancy`): which rows are kept — in the order
+declared, each independent of those before it — and whether the dropped ones agree is decided
+on the constraint manifold (``reference``: the problem at the nearest state on it, see
+:func:`solve_general`); the problem is then solved at the state with the kept rows, so the
+acceleration is exactly the minimal model's, and the multiplier the least-norm one. Dependent
+rows that disagree on the manifold are an error. A realization that cannot keep its
+constraint (``rank S < rank J``: conditions (12)/(16)) is an error here as everywhere else.
 """
 
 from __future__ import annotations
