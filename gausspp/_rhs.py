@@ -73,8 +73,6 @@ class RightHandSide:
         return np.array(self.evaluate(t, y)["qdot"])
 
 
-
-
 class GeneralRightHandSide:
     """``F(t, y)`` through the general Gauss QP (:meth:`Model.general_step`): bounded actuators and
     redundant constraint rows. One numeric QP per evaluation, from Python (tens to hundreds of µs)."""

@@ -19,7 +19,6 @@ returned) with this reference, and the refined ones apart.
 
 from __future__ import annotations
 
-import contextlib
 import warnings
 from dataclasses import dataclass, field
 from typing import Any
@@ -27,15 +26,21 @@ from typing import Any
 import numpy as np
 import qpsolvers
 
-from .errors import BackendUnavailableError, InputError, NotPositiveDefiniteError, QPSolveError, UnknownNameError
+from .errors import (
+    BackendUnavailableError,
+    InputError,
+    NonFiniteError,
+    NotPositiveDefiniteError,
+    QPSolveError,
+    UnknownNameError,
+)
+from .qp.casadi_conic import stdout_silenced
+from .qp.qpsolvers_route import OPTIONS
 
 #: Backends tried in this order for the reference: exact dense active-set codes first, OSQP last.
 REFERENCE_BACKENDS = ("daqp", "quadprog", "osqp")
 #: Relative distance from the reference (and KKT residual of the reference) above which a check fails.
 TOLERANCE = 1e-9
-_OPTIONS: dict[str, dict[str, Any]] = {
-    "osqp": {"eps_abs": 1e-13, "eps_rel": 1e-13, "polishing": True, "max_iter": 50000, "verbose": False},
-}
 
 
 @dataclass(frozen=True)
@@ -89,8 +94,11 @@ def acceleration_qp(
     n = A.shape[0]
     if not (A.shape == (n, n) and a0.shape == (n,) and J.ndim == 2 and J.shape[1] == n and phi.shape == (J.shape[0],)):
         raise InputError(f"acceleration_qp: shapes A {A.shape}, a0 {a0.shape}, J {J.shape}, phi {phi.shape} do not fit")
-    if D.shape[0] != n:
+    if D.ndim != 2 or D.shape[0] != n:
         raise InputError(f"acceleration_qp: D has shape {D.shape}, expected ({n}, m)")
+    for name, x in (("A", A), ("a0", a0), ("J", J), ("phi", phi), ("D", D)):
+        if not np.all(np.isfinite(x)):
+            raise NonFiniteError(f"acceleration_qp: {name} contains NaN or inf; check the step's data")
     if not np.allclose(A, A.T, rtol=1e-12, atol=0) or np.min(np.linalg.eigvalsh(0.5 * (A + A.T))) <= 0:
         raise NotPositiveDefiniteError("acceleration_qp: A is not symmetric positive definite")
     solver = reference_backend(backend)
@@ -104,10 +112,10 @@ def acceleration_qp(
     E, e = E / size[:, None], e / size
     weight = float(np.max(np.abs(A)))
     problem = qpsolvers.Problem(A / weight, -(A @ a0) / weight, A=E, b=e)
-    with warnings.catch_warnings(), contextlib.redirect_stdout(None):
+    with warnings.catch_warnings(), stdout_silenced():
         warnings.simplefilter("ignore")
         try:
-            sol = qpsolvers.solve_problem(problem, solver=solver, **_OPTIONS.get(solver, {}))
+            sol = qpsolvers.solve_problem(problem, solver=solver, **OPTIONS.get(solver, {}))
         except Exception as exc:  # the backend's own error, as ours
             raise QPSolveError(f"the reference QP failed in {solver}: {exc}") from exc
     if not sol.found or sol.x is None or not np.all(np.isfinite(sol.x)):
@@ -181,26 +189,21 @@ def crosscheck(
     """
     if model.contacts or model.bounded:
         raise InputError("crosscheck covers the equality step; this model has contacts or bounded actuators")
-    data = model.step_data(t, q, v, lam)
-    a0 = np.linalg.solve(data.A, data.f + data.r0)
-    ref = acceleration_qp(data.A, a0, data.J, data.phi, data.D, reference_backend)
-    scale = max(
-        float(np.linalg.norm(ref.a)),
-        float(np.linalg.norm(a0)),
-        float(np.linalg.norm(np.linalg.solve(data.A, data.f))),
-        1e-300,
-    )
+    # the model's own answers first: they raise the clear project errors (unrealizable, not positive definite)
     answers: dict[str, np.ndarray] = {}
-    distances: dict[str, float] = {}
-    refined: dict[str, float] = {}
+    polished: dict[str, np.ndarray] = {}
     for solver in solvers:
         if solver == "direct" and model.m != model.k:
             continue
         name = solver if solver == "direct" else f"qp:{backend or 'default'}"
         options = {} if solver == "direct" else {"backend": backend}
-        raw = model.step(t, q, v, lam, solver=solver, refine=False, **options).a
-        answers[name] = raw
-        distances[name] = float(np.linalg.norm(raw - ref.a)) / scale
-        polished = model.step(t, q, v, lam, solver=solver, refine=True, **options).a
-        refined[name] = float(np.linalg.norm(polished - ref.a)) / scale
+        answers[name] = model.step(t, q, v, lam, solver=solver, refine=False, **options).a
+        polished[name] = model.step(t, q, v, lam, solver=solver, refine=True, **options).a
+    data = model.step_data(t, q, v, lam)
+    a0 = np.linalg.solve(data.A, data.f + data.r0)
+    ref = acceleration_qp(data.A, a0, data.J, data.phi, data.D, reference_backend)
+    sizes = (ref.a, a0, np.linalg.solve(data.A, data.f))
+    scale = max(*(float(np.linalg.norm(x)) for x in sizes), 1e-300)
+    distances = {name: float(np.linalg.norm(a - ref.a)) / scale for name, a in answers.items()}
+    refined = {name: float(np.linalg.norm(a - ref.a)) / scale for name, a in polished.items()}
     return CrossCheck(ref, answers, distances, refined, scale, tolerance)

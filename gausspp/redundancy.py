@@ -67,11 +67,3 @@ def independent_rows(rows: np.ndarray, tol: float = DEPENDENCE_TOL) -> tuple[np.
             basis[len(kept)] = r / sines[i]
             kept.append(i)
     return np.array(kept, dtype=int), sines
-
-
-def smallest_sine(rows: np.ndarray) -> float:
-    """The smallest sine of :func:`independent_rows` with nothing dropped (1 for no rows)."""
-    if rows.shape[0] == 0:
-        return 1.0
-    _, sines = independent_rows(rows, tol=0.0)
-    return float(sines.min())

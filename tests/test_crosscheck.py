@@ -119,3 +119,15 @@ def test_crosscheck_refuses_bad_input() -> None:
         gp.acceleration_qp(np.eye(2), np.zeros(3), np.eye(1, 2), np.zeros(1), np.eye(2, 1))
     with pytest.raises(gp.UnknownNameError, match="not installed"):
         gp.acceleration_qp(np.eye(2), np.zeros(2), np.eye(1, 2), np.zeros(1), np.eye(2, 1), backend="nosuchsolver")
+
+
+def test_crosscheck_names_non_finite_data_and_an_unrealizable_state() -> None:
+    with pytest.raises(gp.NonFiniteError, match="a0 contains NaN"):
+        gp.acceleration_qp(np.eye(2), np.array([0.0, np.nan]), np.eye(1, 2), np.zeros(1), np.eye(2, 1))
+    crane = gp.scenes.get("crane")
+    q = np.array(crane.q0, float)
+    q[1] = 0.0  # rope vertical: the trolley force cannot move the payload horizontally (margin 0)
+    with pytest.raises(gp.RealizabilityError, match="not realizable"):
+        gp.crosscheck(crane.model, 0.0, q, np.zeros_like(q))
+    with pytest.raises(gp.NonFiniteError):
+        gp.crosscheck(crane.model, 0.0, np.full_like(q, np.nan), np.zeros_like(q))
