@@ -1,0 +1,141 @@
+"""The package's shape: ``python benchmarks/architecture.py [package_dir]``.
+
+Prints the figures of the before/after table of the layout redesign: number of modules, lines, the
+largest module and function, the import levels (the longest chain of intra-package imports) and the
+import cycles. Every import counts, also those inside functions and under ``TYPE_CHECKING``: a lazy
+import hides a cycle from Python, not from the reader.
+
+``tests/test_architecture.py`` loads this file and asserts on the same graph.
+"""
+
+from __future__ import annotations
+
+import ast
+import sys
+from pathlib import Path
+
+
+
+def _module_name(root: Path, path: Path) -> str:
+    parts = list(path.relative_to(root.parent).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def _resolve(name: str, modules: set[str]) -> str | None:
+    """The package module that ``import name`` loads (its longest existing prefix)."""
+    while name and name not in modules:
+        name = name.rpartition(".")[0]
+    return name or None
+
+
+def import_graph(root: Path) -> dict[str, set[str]]:
+    """module -> package modules it imports (every import statement, at any depth of the file)."""
+    paths = {_module_name(root, p): p for p in sorted(root.rglob("*.py"))}
+    modules = set(paths)
+    graph: dict[str, set[str]] = {}
+    for name, path in paths.items():
+        is_pkg = path.name == "__init__.py"
+        package = name if is_pkg else name.rpartition(".")[0]
+        edges: set[str] = set()
+        for node in ast.walk(ast.parse(path.read_text())):
+            targets: list[str] = []
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    anchor = package.split(".")
+                    anchor = anchor[: len(anchor) - (node.level - 1)]
+                    base = ".".join([*anchor, base] if base else anchor)
+                # "from pkg import sub" imports the submodule when there is one, else pkg itself
+                targets = [f"{base}.{a.name}" if f"{base}.{a.name}" in modules else base for a in node.names]
+            for target in targets:
+                hit = _resolve(target, modules)
+                if hit is not None and hit != name and not name.startswith(hit + "."):
+                    edges.add(hit)  # a module's own parent packages load implicitly: not an edge
+        graph[name] = edges
+    return graph
+
+
+def strongly_connected(graph: dict[str, set[str]]) -> list[set[str]]:
+    """Tarjan's strongly connected components; a component of more than one module is a cycle."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    out: list[set[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = set()
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.add(w)
+                if w == v:
+                    break
+            out.append(comp)
+
+    sys.setrecursionlimit(max(10_000, sys.getrecursionlimit()))
+    for v in graph:
+        if v not in index:
+            visit(v)
+    return out
+
+
+def levels(graph: dict[str, set[str]]) -> dict[str, int]:
+    """Import level of each module: 1 + the highest level it imports (a cycle counts as one level)."""
+    comp_of = {m: i for i, c in enumerate(strongly_connected(graph)) for m in c}
+    memo: dict[int, int] = {}
+
+    def level(c: int) -> int:
+        if c not in memo:
+            members = [m for m, i in comp_of.items() if i == c]
+            below = {comp_of[w] for m in members for w in graph[m]} - {c}
+            memo[c] = 1 + max((level(b) for b in below), default=0)
+        return memo[c]
+
+    return {m: level(comp_of[m]) for m in graph}
+
+
+def longest_function(path: Path) -> tuple[int, str]:
+    """(lines, name) of the longest function or method in one file."""
+    best = (0, "")
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            n = (node.end_lineno or node.lineno) - node.lineno + 1
+            best = max(best, (n, node.name))
+    return best
+
+
+def main(root: Path) -> None:
+    files = sorted(root.rglob("*.py"))
+    sizes = {f: len(f.read_text().splitlines()) for f in files}
+    rel = {f: f.relative_to(root.parent).as_posix() for f in files}
+    top_level = [f for f in files if f.parent == root]
+    big = max(files, key=sizes.__getitem__)
+    fn_len, fn_name, fn_file = max((*longest_function(f), rel[f]) for f in files)
+    graph = import_graph(root)
+    cycles = [sorted(c) for c in strongly_connected(graph) if len(c) > 1]
+    depth = levels(graph)
+    print(f"modules                 {len(files)}  ({len(top_level)} flat at the top)")
+    print(f"packages                {sorted({rel[f].rsplit('/', 1)[0] for f in files})}")
+    print(f"lines                   {sum(sizes.values())}")
+    print(f"largest module          {rel[big]} ({sizes[big]} lines)")
+    print(f"largest function        {fn_file}:{fn_name} ({fn_len} lines)")
+    print(f"modules over 400 lines  {sum(s > 400 for s in sizes.values())}")
+    print(f"import levels           {max(depth.values())}")
+    print(f"import cycles           {len(cycles)}  {cycles}")
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parents[1] / "gausspp")
