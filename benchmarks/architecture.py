@@ -15,7 +15,6 @@ import sys
 from pathlib import Path
 
 
-
 def _module_name(root: Path, path: Path) -> str:
     parts = list(path.relative_to(root.parent).with_suffix("").parts)
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)

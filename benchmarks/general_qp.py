@@ -10,8 +10,8 @@ Cases (one state each):
 * ``four-bar-redundant`` (three loop rows of rank 2), beside the minimal model's compiled steps.
 
 Columns: ``step µs`` — the checked ``Model.general_step`` / ``Model.step`` (model data from casadi,
-the QP stages, result packaging); ``QP µs`` — :func:`gausspp.gauss_qp.solve_general` alone on the
-same :class:`~gausspp.gauss_qp.GaussProblem`; ``vs daqp`` — the largest relative difference in the
+the QP stages, result packaging); ``QP µs`` — :func:`gausspp.step.general.solve_general` alone on the
+same :class:`~gausspp.step.general.GaussProblem`; ``vs daqp`` — the largest relative difference in the
 acceleration and (where the unknowns are the same) the reaction from the general QP with daqp.
 Each time is the minimum over repeats of the mean per-call time (noise only adds time).
 
@@ -38,11 +38,11 @@ import qpsolvers
 from _timing import best_us
 
 import gausspp as gp
-import gausspp.model as _model_module
-from gausspp.gauss_qp import GaussProblem, solve_general
-from gausspp.results import StepResult
+import gausspp.model.model as _model_module
 from gausspp.scenes import crane, four_bar, saturated_crane
 from gausspp.scenes import two_actuator_servo as tas
+from gausspp.step.general import GaussProblem, solve_general
+from gausspp.step.results import StepResult
 
 GENERAL = ("daqp", "osqp")
 

@@ -21,9 +21,9 @@ import warnings
 import numpy as np
 
 import gausspp as gp
-from gausspp import methods
-from gausspp._compiled import _rk_step, rhs_function
-from gausspp.drift import Stabilization
+from gausspp.simulation import methods
+from gausspp.simulation.compiled import _rk_step, rhs_function
+from gausspp.simulation.drift import Stabilization
 
 RUNS = [
     ("rk4", {"dt": 1e-3}),

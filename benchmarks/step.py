@@ -28,10 +28,10 @@ import numpy as np
 import qpsolvers
 from _timing import best_us
 
-import gausspp.qp
 import gausspp.scenes
-from gausspp.results import StepResult
+import gausspp.step.qp
 from gausspp.scenes import Scene
+from gausspp.step.results import StepResult
 
 SCENES: list[tuple[str, str, dict[str, Any]]] = [
     ("two-masses servo", "two-masses", {"realization": "servo"}),

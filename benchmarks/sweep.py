@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from gausspp.sweeps import grid, simulate_task, sweep
+from gausspp.studies.sweeps import grid, simulate_task, sweep
 
 
 def noop_task(params: dict[str, Any]) -> dict[str, float]:

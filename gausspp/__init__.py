@@ -8,10 +8,9 @@ compulsion as a QP and is cross-checked against the direct multiplier solution.
 
 from __future__ import annotations
 
-from . import methods, plot, qp, realizability, report, scenes, sweeps
-from .constraints import Constraint, Holonomic, Unilateral
-from .crosscheck import CrossCheck, acceleration_qp, crosscheck
-from .drift import Baumgarte
+import sys
+
+from . import plot, scenes
 from .errors import (
     GaussppError,
     GaussppWarning,
@@ -31,17 +30,29 @@ from .errors import (
     SymbolicError,
     UnknownNameError,
 )
-from .frontends import Lagrangian, MassMatrix, Mechanism, RigidBody
-from .integral import Verification, verify
-from .model import Model
-from .problem import StepProblem, solve
-from .realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
-from .results import StepResult
-from .simulate import simulate
-from .sweeps import sweep
-from .trajectory import Trajectory
+from .model.constraints import Constraint, Holonomic, Unilateral
+from .model.mechanism import Lagrangian, MassMatrix, Mechanism, RigidBody
+from .model.model import Model
+from .model.realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
+from .simulation import methods
+from .simulation.drift import Baumgarte
+from .simulation.simulate import simulate
+from .simulation.trajectory import Trajectory
+from .step import qp, realizability
+from .step.problem import StepProblem, solve
+from .step.results import StepResult
+from .studies import report, sweeps
+from .studies.sweeps import sweep
+from .verification.crosscheck import CrossCheck, acceleration_qp, crosscheck
+from .verification.integral import Verification, verify
 
 __version__ = "0.1.0"
+
+# The public modules keep their short import paths (``import gausspp.qp``, ``from gausspp.sweeps import grid``)
+# wherever they live in the layout (docs/architecture.md).
+for _module in (methods, qp, realizability, report, sweeps):
+    sys.modules[f"{__name__}.{_module.__name__.rpartition('.')[2]}"] = _module
+del _module
 
 __all__ = [
     "acceleration_qp",

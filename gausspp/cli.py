@@ -26,12 +26,14 @@ from typing import IO, Any, NoReturn
 
 import numpy as np
 
-from . import methods, qp, scenes
-from .crosscheck import crosscheck
+from . import scenes
 from .errors import GaussppError, LongRunWarning, UnknownNameError
-from .model import Model
+from .model.model import Model
 from .scenes._scene import kinds as parameter_kinds
-from .trajectory import Trajectory
+from .simulation import methods
+from .simulation.trajectory import Trajectory
+from .step import qp
+from .verification.crosscheck import crosscheck
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -293,7 +295,7 @@ def _demo_figures(out: Path) -> None:
     except GaussppError as exc:  # matplotlib is an optional extra
         print(f"\n(no figures: {exc})")
         return
-    from .simulate import simulate
+    from .simulation.simulate import simulate
 
     out.mkdir(parents=True, exist_ok=True)
     runs = {}
@@ -319,8 +321,8 @@ def _demo_figures(out: Path) -> None:
 
 def _demo_scenes() -> None:
     """Every scene: compiled RK4 by QP and by the direct step, constraint residual, verification by (23)."""
-    from .integral import verify
-    from .simulate import simulate
+    from .simulation.simulate import simulate
+    from .verification.integral import verify
 
     print(
         f"Every scene, compiled RK4 with the direct step and with the Gauss QP ({qp.DEFAULT}), then verified by (23):\n"
@@ -359,8 +361,8 @@ def _demo_scenes() -> None:
 
 def _demo_general() -> None:
     """Scenes without a closed-form step: contacts, bounded or extra actuators, redundant rows (general QP)."""
-    from .gauss_qp import default_backend
-    from .simulate import simulate
+    from .simulation.simulate import simulate
+    from .step.general import default_backend
 
     first = default_backend()  # daqp when installed, else OSQP: then there is no second backend to compare with
     second = None if first == "osqp" else "osqp"
@@ -423,7 +425,7 @@ def _demo_general() -> None:
 
 def _print_study(rows: list[Any]) -> None:
     """The work-precision table and the fastest run per scene reaching 1e-10."""
-    from . import report as study
+    from .studies import report as study
 
     print(study.table(rows))
     print("\nFastest run reaching a final-state error ≤ 1e-10, per scene:")
@@ -440,11 +442,11 @@ def report(args: argparse.Namespace) -> int:
     """Work-precision study (or, with --stability, the stability study): table, CSV/JSON, plots."""
     from pathlib import Path
 
-    from . import report as study
+    from .studies import report as study
 
     out = Path(args.out)
     if args.stability:
-        from . import stability
+        from .studies import stability
 
         cases = stability.run(quick=not args.full)
         print(stability.table(cases))
@@ -481,7 +483,7 @@ def _simulate(
     (or, with ``every_step``, every accepted step with ``T/samples`` as the largest step), every
     k-th step for fixed-step ones.
     """
-    from .simulate import simulate
+    from .simulation.simulate import simulate
 
     meth = methods.get(args.method)
     t_end = scene.t_end if args.t_end is None else args.t_end
@@ -702,7 +704,7 @@ def run(args: argparse.Namespace) -> int:
 # -- verify -------------------------------------------------------------------------------------
 def verify(args: argparse.Namespace) -> int:
     """Simulate a scene, then decide by (23) whether the path is a motion of its model (or of another)."""
-    from .integral import verify as check
+    from .verification.integral import verify as check
 
     params = _parse_params(args.scene, args.param)
     check_params = _parse_params(args.scene, args.check_param, "--check-param")
@@ -800,7 +802,7 @@ def _workers_text(args: argparse.Namespace) -> str:
 
 
 def _sweep_realizability(args: argparse.Namespace, executor: Any) -> int:
-    from . import sweeps
+    from .studies import sweeps
 
     step = 2.0 if args.resolution is None else args.resolution
     if not (np.isfinite(step) and 0 < step <= 30):
@@ -829,8 +831,8 @@ def _sweep_realizability(args: argparse.Namespace, executor: Any) -> int:
 
 
 def _sweep_work_precision(args: argparse.Namespace, executor: Any) -> int:
-    from . import report as study
-    from . import sweeps
+    from .studies import report as study
+    from .studies import sweeps
 
     solvers = args.solvers
     if solvers:

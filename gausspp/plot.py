@@ -31,10 +31,10 @@ from .errors import GaussppError, InputError, ShapeError
 from .scenes._rigid import inertia_matrix, unit_vector
 
 if TYPE_CHECKING:
-    from .integral import Verification
-    from .model import Model
-    from .report import Row
-    from .trajectory import Trajectory
+    from .model.model import Model
+    from .simulation.trajectory import Trajectory
+    from .studies.report import Row
+    from .verification.integral import Verification
 
 #: Line styles that tell runs apart when several are drawn on one axes (colours tell components).
 _STYLES = ("-", "--", ":", "-.")
@@ -250,7 +250,7 @@ def contacts(model: Model, traj: Trajectory, *, title: str | None = None) -> Any
     matplotlib.figure.Figure
         Three axes: gaps, forces, energy.
     """
-    from .contact import _gaps
+    from .simulation.contacts import _gaps
 
     names = [str(s) for s in getattr(model, "contact_row_names", [])]
     if not names:
@@ -608,7 +608,7 @@ def three_realizations_runs(
         Keys ``"ideal"``, ``"force"``, ``"inertial"``.
     """
     from . import scenes
-    from .simulate import simulate
+    from .simulation.simulate import simulate
 
     common = dict(inertia=inertia, l=l, omega0=omega0, t_end=t_end)
     built = {
@@ -731,7 +731,7 @@ def skate_runs(
     Integrated by DOP853 (``rtol = 1e-10``), recorded at ``samples`` uniform times.
     """
     from . import scenes
-    from .simulate import simulate
+    from .simulation.simulate import simulate
 
     times = np.linspace(0.0, float(t_end), int(samples))
     out = {}

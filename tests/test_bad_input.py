@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 
 import gausspp as gp
 from gausspp import cli
-from gausspp.sweeps import grid
+from gausspp.studies.sweeps import grid
 
 T_END, DT = 0.01, 0.005  # two RK4 steps: a valid run costs next to nothing
 

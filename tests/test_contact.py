@@ -11,10 +11,10 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 import gausspp as gp
-from gausspp.contact import _gaps
-from gausspp.gauss_qp import GaussProblem, solve_general
 from gausspp.scenes.block_on_floor import bounce_times
 from gausspp.scenes.bouncing_pendulum import impact_times
+from gausspp.simulation.contacts import _gaps
+from gausspp.step.general import GaussProblem, solve_general
 
 from .factories import random_spd
 
@@ -197,7 +197,7 @@ def test_unilateral_and_contact_simulation_input_errors() -> None:
 def test_a_contact_run_that_fails_keeps_what_it_computed() -> None:
     model = _ball(1.0)  # elastic: never comes to rest, events pile up
     with pytest.raises(gp.IntegrationError, match="contact events") as info:
-        from gausspp.contact import simulate_contacts
+        from gausspp.simulation.contacts import simulate_contacts
 
         simulate_contacts(model, [0.0, 1.0], [0.0, 0.0], 10.0, max_events=3)
     traj = info.value.trajectory  # type: ignore[attr-defined]

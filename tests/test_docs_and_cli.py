@@ -61,7 +61,7 @@ def test_demo_says_which_qp_backends_it_compared(
     """With daqp the general-QP table compares it with OSQP; without, it says so (not OSQP against itself)."""
     import qpsolvers
 
-    import gausspp.gauss_qp
+    import gausspp.step.general
 
     if first not in qpsolvers.available_solvers:
         pytest.skip(f"{first} is not installed")
@@ -69,7 +69,7 @@ def test_demo_says_which_qp_backends_it_compared(
     monkeypatch.setattr(
         cli.scenes, "names", lambda kind="all": ["two-actuator-servo"] if kind == "general" else names(kind)
     )
-    monkeypatch.setattr(gausspp.gauss_qp, "default_backend", lambda: first)
+    monkeypatch.setattr(gausspp.step.general, "default_backend", lambda: first)
     cli._demo_general()
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.startswith("two-actuator-servo")).split()

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-from gausspp.qp import QPBackend
+from gausspp.step.qp import QPBackend
 
 
 def masses(realization: gp.Realization | None = None, m1: float = 1.0, m2: float = 3.0) -> gp.Model:

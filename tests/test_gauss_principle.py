@@ -13,7 +13,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import gausspp as gp
-from gausspp.realizability import cosines
+from gausspp.step.realizability import cosines
 
 from .factories import random_spd
 

@@ -1,4 +1,4 @@
-"""The general Gauss QP (gausspp.gauss_qp) and the model features built on it: errors and edge cases."""
+"""The general Gauss QP (gausspp.step.general) and the model features built on it: errors and edge cases."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-from gausspp.gauss_qp import GaussProblem, check_backend, default_backend, solve_general
+from gausspp.step.general import GaussProblem, check_backend, default_backend, solve_general
 
 BACKENDS = ["daqp", "osqp"]
 

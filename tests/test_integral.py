@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-from gausspp.integral import Discretized, solve_closed_form, solve_qp
+from gausspp.verification.integral import Discretized, solve_closed_form, solve_qp
 
 from .factories import random_spd
 

@@ -76,7 +76,7 @@ def test_the_compiled_lane_checks_the_margin_at_every_step() -> None:
 
 def test_the_margin_bound_brackets_the_margin() -> None:
     """b ≤ σ_min ≤ √k·b along the model's states (k = 2)."""
-    from gausspp._compiled import margin_bound
+    from gausspp.simulation.compiled import margin_bound
 
     model = _turning_actuators()
     bound = margin_bound(model)

@@ -19,7 +19,7 @@ import gausspp as gp
 
 pytest.importorskip("matplotlib")
 from gausspp import plot  # noqa: E402
-from gausspp.report import Row  # noqa: E402
+from gausspp.studies.report import Row  # noqa: E402
 
 INERTIA = (1.0, 2.0, 3.0)
 SKEW_L = (1.0, 1.0, 1.0)

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-from gausspp.progress import Progress
+from gausspp.simulation.progress import Progress
 
-simulate_module = importlib.import_module("gausspp.simulate")
+simulate_module = importlib.import_module("gausspp.simulation.simulate")
 
 
 def test_progress_line_states_the_fraction_and_the_time_left() -> None:

@@ -7,7 +7,7 @@ import pytest
 import qpsolvers
 
 import gausspp as gp
-from gausspp.gauss_qp import GaussProblem, solve_general
+from gausspp.step.general import GaussProblem, solve_general
 
 
 def _problem() -> GaussProblem:
@@ -49,12 +49,12 @@ def test_a_feasible_but_not_optimal_answer_is_refused(monkeypatch: pytest.Monkey
 
 def test_the_compiled_step_refuses_a_large_dual_residual() -> None:
     """The compiled QP's own outputs, with the dual residual replaced by a large one: refused; as computed: kept."""
-    from gausspp._outcome import Where, to_result
+    from gausspp.step.outcome import Where, to_result
 
     scene = gp.scenes.get("two-masses", realization="servo")
     model = scene.model
     out = dict(model.kernel("qp")(0.0, scene.q0, scene.v0, np.zeros(model.n_lam), np.zeros(2)))
-    where = Where(0.0, "casadi:qrqp", model._groups, lambda: model.step_data(0.0, scene.q0, scene.v0))
+    where = Where(0.0, "casadi:qrqp", model.groups, lambda: model.step_data(0.0, scene.q0, scene.v0))
     assert float(out["qp_dual"][0]) < 1e-12
     assert to_result(out, where, margin_warn=1e-6, margin_error=1e-12).a.shape == (2,)
     out["qp_dual"] = np.array([1e-3])

@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-from gausspp import cli, report
+from gausspp import cli
+from gausspp.studies import report
 
 
 def test_reduced_study_writes_table_data_and_plots(tmp_path: Path) -> None:

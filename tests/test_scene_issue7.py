@@ -22,10 +22,10 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 import gausspp as gp
-from gausspp.gauss_qp import GaussProblem, solve_general
-from gausspp.realizability import cosines
 from gausspp.scenes import crane, four_bar, saturated_crane
 from gausspp.scenes import two_actuator_servo as tas
+from gausspp.step.general import GaussProblem, solve_general
+from gausspp.step.realizability import cosines
 
 from .factories import random_spd
 
@@ -525,7 +525,7 @@ def test_four_bar_initial_data_close_the_loop() -> None:
     for third_row in four_bar.THIRD_ROWS:
         scene = four_bar.build(third_row=third_row)
         assert scene.model.k == 3 and scene.model.row_names[-1] == f"closure ({third_row})"
-        out = scene.model._general_data(0.0, scene.q0, scene.v0, np.zeros(0), np.zeros(2))
+        out = scene.model.evaluate_data(0.0, scene.q0, scene.v0, np.zeros(0), np.zeros(2))
         assert np.max(np.abs(out[6])) < 1e-14 and np.max(np.abs(out[7])) < 1e-14  # Φ and g
         assert np.linalg.matrix_rank(scene.model.step_data(0.0, scene.q0, scene.v0).J, tol=1e-9) == 2
     assert four_bar.build(redundant=False).model.k == 2

@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-from gausspp import stability
-from gausspp.stability import Case, crane, margins, redundant
+from gausspp.studies import stability
+from gausspp.studies.stability import Case, crane, margins, redundant
 
 EPS = float(np.finfo(float).eps)
 

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from gausspp.errors import InputError, UnknownNameError
-from gausspp.sweeps import SweepError, SweepResult, grid, realizability_task, simulate_task, sweep
+from gausspp.studies.sweeps import SweepError, SweepResult, grid, realizability_task, simulate_task, sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -123,7 +123,7 @@ def test_bad_arguments_name_the_parameter() -> None:
 
 _KILLED = """
 import sys
-from gausspp.sweeps import grid, sweep
+from gausspp.studies.sweeps import grid, sweep
 from tests.test_sweep import counted_task
 sweep(counted_task, grid(i=range({n}), log=[sys.argv[1]], sleep=[0.03]), chunk=1, out=sys.argv[2], progress=False)
 """
@@ -281,7 +281,7 @@ def test_npz_columns_and_round_trip(tmp_path: Path) -> None:
 def test_work_precision_sweep_gives_the_report_rows() -> None:
     from dataclasses import asdict
 
-    from gausspp import report, sweeps
+    from gausspp.studies import report, sweeps
 
     config = (["two-masses", "mixed-rate"], ["rk4", "rk4-compiled", "DOP853"], ["direct", "casadi:qrqp"])
     expected = report.work_precision(*config, repeats=1)

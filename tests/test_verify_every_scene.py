@@ -1,7 +1,7 @@
 """gp.verify on every scene's own simulated run: a motion, or a project error that says why (issue 15).
 
 Contacts are verified between their events, a saturating servo by the law it followed on each
-interval (gausspp.pieces). Negative controls: the same paths checked against a model with another
+interval (gausspp.verification.pieces). Negative controls: the same paths checked against a model with another
 parameter (gravity, the motor's bound) or bent, still on the constraint, are not motions.
 """
 

@@ -6,8 +6,8 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import array
 from ..errors import InputError, ShapeError
+from ..validation import array
 
 
 def unit_vector(scene: str, name: str, value: Any) -> np.ndarray:

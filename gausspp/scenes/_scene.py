@@ -13,9 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import number
 from ..errors import InputError, UnknownNameError
-from ..model import Model
+from ..model.model import Model
+from ..validation import number
 
 
 @dataclass(frozen=True)

@@ -45,10 +45,10 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..constraints import Holonomic
 from ..errors import InputError
-from ..frontends import MassMatrix
-from ..model import Model
+from ..model.constraints import Holonomic
+from ..model.mechanism import MassMatrix
+from ..model.model import Model
 from ._scene import Scene
 
 # -- parameters (SI units), test-set names --------------------------------------------------------

@@ -21,10 +21,10 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..constraints import Unilateral
 from ..errors import InputError
-from ..frontends import Lagrangian
-from ..model import Model
+from ..model.constraints import Unilateral
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
 from ._scene import Scene
 
 

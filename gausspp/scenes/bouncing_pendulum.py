@@ -18,10 +18,10 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..constraints import Holonomic, Unilateral
 from ..errors import InputError
-from ..frontends import Lagrangian
-from ..model import Model
+from ..model.constraints import Holonomic, Unilateral
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
 from ._scene import Scene
 
 

@@ -25,7 +25,7 @@ no answer (``S = J A⁻¹ Jᵀ`` is singular). ``third_row`` picks it:
   manifold (:mod:`gausspp.redundancy`) and returns the minimal model's acceleration.
 
 Gauss's principle still fixes the acceleration uniquely; ``solver="qp"`` returns it with the
-least-norm multiplier (:mod:`gausspp.gauss_qp`), ``solver="direct"`` refuses with a
+least-norm multiplier (:mod:`gausspp.step.general`), ``solver="direct"`` refuses with a
 :class:`~gausspp.RealizabilityError` that says the rows are redundant.
 
 With the defaults (``l0, l1, l2, l3 = 1, 0.3, 1, 0.8``: a Grashof crank-rocker, the crank turns
@@ -41,10 +41,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..constraints import Holonomic
 from ..errors import InputError, UnknownNameError
-from ..frontends import Lagrangian
-from ..model import Model
+from ..model.constraints import Holonomic
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
 from ._scene import Scene
 
 THIRD_ROWS = ("oblique", "distance")

@@ -21,11 +21,11 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..constraints import Constraint
 from ..errors import ShapeError
-from ..frontends import RigidBody
-from ..model import Model
-from ..realizations import Inertial
+from ..model.constraints import Constraint
+from ..model.mechanism import RigidBody
+from ..model.model import Model
+from ..model.realizations import Inertial
 from ._rigid import inertia_matrix, on_plane, unit_vector
 from ._scene import Scene
 

@@ -26,11 +26,11 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..constraints import Constraint
 from ..errors import InputError
-from ..frontends import MassMatrix
-from ..model import Model
-from ..realizations import Force
+from ..model.constraints import Constraint
+from ..model.mechanism import MassMatrix
+from ..model.model import Model
+from ..model.realizations import Force
 from ._rigid import inertia_matrix, on_plane, unit_vector
 from ._scene import Scene
 

@@ -24,12 +24,12 @@ from typing import Any
 
 import numpy as np
 
-from .._checks import array
-from ..constraints import Constraint
 from ..errors import InputError, ShapeError, UnknownNameError
-from ..frontends import Lagrangian
-from ..model import Model
-from ..realizations import Mixed
+from ..model.constraints import Constraint
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
+from ..model.realizations import Mixed
+from ..validation import array
 from ._scene import Scene
 
 LAWS = ("proportional", "rate")

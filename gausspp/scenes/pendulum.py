@@ -22,10 +22,10 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..constraints import Holonomic
 from ..errors import InputError
-from ..frontends import Lagrangian
-from ..model import Model
+from ..model.constraints import Holonomic
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
 from ._scene import Scene
 
 

@@ -13,10 +13,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..constraints import Constraint
-from ..frontends import RigidBody
-from ..model import Model
-from ..realizations import Force
+from ..model.constraints import Constraint
+from ..model.mechanism import RigidBody
+from ..model.model import Model
+from ..model.realizations import Force
 from ._rigid import inertia_matrix, on_plane, unit_vector
 from ._scene import Scene
 

@@ -8,7 +8,7 @@ The mechanism, the prescribed payload motion ``s(t)`` and the servo-constraint a
 
 While the force the servo needs stays within the bound, the motion is the crane's. When it does
 not, the motor saturates: the step pushes at the bound in the direction that keeps the constraint
-best and reports the shortfall as ``tracking_error`` (:mod:`gausspp.gauss_qp`, stage *track*);
+best and reports the shortfall as ``tracking_error`` (:mod:`gausspp.step.general`, stage *track*);
 the payload leaves its path. Baumgarte feedback ``J q̈ = φ − αΦ − βg`` (critically damped with
 time constant ``tau``: ``α = 2/τ``, ``β = 1/τ²``) brings it back once the motor has room again.
 The scene's feedback is in ``params["stabilize"]``; simulate with
@@ -26,11 +26,11 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
-from ..constraints import Holonomic
-from ..drift import Baumgarte
 from ..errors import InputError
-from ..model import Model
-from ..realizations import Force
+from ..model.constraints import Holonomic
+from ..model.model import Model
+from ..model.realizations import Force
+from ..simulation.drift import Baumgarte
 from . import crane
 from ._scene import Scene
 

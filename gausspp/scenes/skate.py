@@ -26,11 +26,11 @@ from collections.abc import Callable
 import casadi as ca
 import numpy as np
 
-from ..constraints import Constraint
 from ..errors import InputError, UnknownNameError
-from ..frontends import Lagrangian
-from ..model import Model
-from ..realizations import Ideal, Vakonomic
+from ..model.constraints import Constraint
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
+from ..model.realizations import Ideal, Vakonomic
 from ._scene import Scene
 
 REALIZATIONS = ("nonholonomic", "vakonomic")

@@ -25,11 +25,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from ..constraints import Constraint
 from ..errors import InputError, UnknownNameError
-from ..frontends import Lagrangian
-from ..model import Model
-from ..realizations import Force, Ideal, Realization
+from ..model.constraints import Constraint
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
+from ..model.realizations import Force, Ideal, Realization
 from ._scene import Scene
 
 REALIZATIONS = ("ideal", "servo")

@@ -38,11 +38,11 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..constraints import Holonomic
 from ..errors import InputError
-from ..frontends import Lagrangian
-from ..model import Model
-from ..realizations import Force
+from ..model.constraints import Holonomic
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
+from ..model.realizations import Force
 from ._scene import Scene
 from .crane import _sigma
 

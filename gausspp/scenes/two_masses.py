@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..constraints import Constraint
 from ..errors import InputError, UnknownNameError
-from ..frontends import Lagrangian
-from ..model import Model
-from ..realizations import Force, Ideal
+from ..model.constraints import Constraint
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
+from ..model.realizations import Force, Ideal
 from ._scene import Scene
 
 REALIZATIONS = ("ideal", "servo")

@@ -1,0 +1,305 @@
+"""The compiled lane: the whole right-hand side as one casadi graph.
+
+``rk4-compiled`` chains RK4 steps with ``mapaccum``: the whole run is one C call. ``cvodes``
+hands the (direct-path) right-hand side to SUNDIALS CVODES through ``casadi.integrator``.
+Both return the states on their grid; recording is the caller's job.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError, RealizabilityError
+from ..model.model import Model
+from ..step.expressions import OUTPUTS, reduce
+from ..step.kernel import CompiledKernel
+from ..step.qp.casadi_conic import stdout_silenced
+from . import methods as _methods
+from .drift import Stabilization, projection_function
+
+#: CVODES gives up after this many internal steps (≈1 s on a small model) instead of stalling.
+MAX_CVODES_STEPS = 100_000
+
+_RHS_OUTPUTS = [OUTPUTS.index(k) for k in ("qdot", "a", "u", "power_reaction", "power_forces")]
+
+
+def _only(fn: ca.Function, outputs: list[int]) -> ca.Function:
+    """An SX function computing only the chosen outputs (the rest is dropped from the graph)."""
+    args = fn.sx_in()
+    res = fn.call(args)
+    return ca.Function(f"{fn.name()}_part", args, [res[i] for i in outputs])
+
+
+def rhs_function(model: Model, solver: str, backend: str | None) -> ca.Function:
+    """``F(t, y, stab) -> y'`` with ``y = (q, v, λ, W_R, W_F)``, the step inside the graph.
+
+    With ``solver="direct"`` the result is a pure SX function (one flat instruction list); with
+    a casadi QP backend an MX graph around the conic node, computing only what ``y'`` needs.
+    """
+    kernel = model.kernel(solver, backend)
+    if not isinstance(kernel, CompiledKernel):
+        raise InputError(
+            f"the compiled lane needs the step inside the casadi graph: use solver='direct' or a casadi QP "
+            f"backend (casadi:qrqp, casadi:daqp, casadi:osqp, ...), not {backend!r}"
+        )
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    t, y, stab = ca.MX.sym("t"), ca.MX.sym("y", nq + nv + nl + 2), ca.MX.sym("stab", 2)
+    args = [t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], stab]
+    if kernel.qp_parts is None:
+        qdot, a, u, pR, pF = _only(kernel.function, _RHS_OUTPUTS)(*args)
+    else:
+        build, finish, qp_backend = kernel.qp_parts
+        H, S, rhs = build(*args)
+        z, mult = qp_backend.graph(H, S, rhs)
+        qdot, a, u, pR, pF = _only(finish, _RHS_OUTPUTS)(*args, z, mult)
+    lam_dot = ca.vertcat(*[u[i] for i in model.lam_columns]) if model.lam_columns else ca.MX(0, 1)
+    F = ca.Function("rhs", [t, y, stab], [ca.vertcat(qdot, a, lam_dot, pR, pF)])
+    return F.expand() if kernel.qp_parts is None else F
+
+
+def _rk_step(model: Model, F: ca.Function, tableau: _methods.Tableau, stab: Stabilization) -> ca.Function:
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    t, h, y, s = ca.MX.sym("t"), ca.MX.sym("h"), ca.MX.sym("y", F.size1_in(1)), ca.MX.sym("stab", 2)
+    stages: list[ca.MX] = []
+    for c, row in zip(tableau.c, tableau.A, strict=True):
+        yi = y
+        for a, k in zip(row, stages, strict=False):
+            if a:
+                yi = yi + h * a * k
+        stages.append(F(t + c * h, yi, s))
+    y1 = y
+    for b, k in zip(tableau.b, stages, strict=True):
+        y1 = y1 + h * b * k
+    q1 = _normalize(model, y1[:nq])
+    v1, lam1 = y1[nq : nq + nv], y1[nq + nv : nq + nv + nl]
+    if stab.project:
+        q1, v1 = projection_function(model)(t + h, q1, v1, lam1)
+    y1 = ca.vertcat(q1, v1, lam1, y1[nq + nv + nl :])
+    step = ca.Function("rk_step", [y, t, h, s], [y1, margin_bound(model)(t, y)])
+    try:
+        flat = step.expand()  # direct path: one flat SX instruction list for the whole step ...
+    except RuntimeError:
+        return step  # a conic node cannot be expanded; the QP stays a call in the MX graph
+    args = flat.sx_in()
+    return ca.Function("rk_step", args, ca.cse(flat.call(args)))  # ... without repeated subexpressions
+
+
+#: Above this many constraint rows the compiled lane checks the margin at the recorded samples only (the bound
+#: below needs a symbolic k × k inverse).
+MARGIN_BOUND_ROWS = 8
+
+
+def margin_bound(model: Model) -> ca.Function:
+    """``(t, y) ↦ b`` with ``b ≤ σ_min(S_norm) ≤ √k · b``, the realizability margin within a factor √k.
+
+    ``b = 1 / √trace((S Sᵀ)⁻¹)``: ``trace((S Sᵀ)⁻¹) = Σ 1/σᵢ²`` lies between ``1/σ_min²`` and ``k/σ_min²``.
+    For one row it is the row's length, the margin itself. ``+inf`` when there are no rows or too many
+    (:data:`MARGIN_BOUND_ROWS`); 0 when ``S`` has more rows than columns.
+    """
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    t, y = ca.SX.sym("t"), ca.SX.sym("y", nq + nv + nl + 2)
+    k, m = model.k, model.m
+    if k == 0 or k > MARGIN_BOUND_ROWS:
+        bound = ca.SX(np.inf)
+    elif k > m:
+        bound = ca.SX(0.0)
+    else:
+        S_of = ca.Function("S_norm", model.inputs, [reduce(model.expressions).S_norm])
+        S = S_of(t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], ca.SX.zeros(2))
+        G = S @ S.T
+        bound = 1 / ca.sqrt(ca.trace(ca.solve(G, ca.SX.eye(k)))) if k > 1 else ca.sqrt(G[0, 0])
+    return ca.Function("margin_bound", [t, y], [bound])
+
+
+def _margin_failure(model: Model, times: np.ndarray, bounds: np.ndarray) -> tuple[int, Exception] | None:
+    """The first step whose start has a margin certainly below ``margin_error`` (or not finite), as an error."""
+    certain = ~(bounds * np.sqrt(max(model.k, 1)) >= model.margin_error)  # NaN counts: S singular there
+    if not certain.any():
+        return None
+    i = int(np.argmax(certain))
+    return i, RealizabilityError(
+        f"the realizability margin falls below margin_error={model.margin_error:g} at t={times[i]:.6g} ("
+        f"{f'at most {bounds[i] * np.sqrt(model.k):.3g}' if np.isfinite(bounds[i]) else 'not finite'}; "
+        f"constraints {', '.join(repr(n) for n in model.names)}): the "
+        "realization cannot keep the constraint there; the run stops",
+        t=float(times[i]),
+        constraint=", ".join(model.names),
+        margin=float(bounds[i]),
+    )
+
+
+def _normalize(model: Model, q: ca.MX) -> ca.MX:
+    qs = ca.SX.sym("q", model.nq)
+    return ca.Function("normalize", [qs], [model.mechanism.normalize(qs)])(q)
+
+
+def integrate_compiled(
+    meth: _methods.Method,
+    model: Model,
+    solver: str,
+    backend: str | None,
+    stab: Stabilization,
+    t0: float,
+    t_end: float,
+    dt: float | None,
+    y0: np.ndarray,
+    rtol: float,
+    atol: float,
+    record: Any,
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int]:
+    """Run a compiled-lane method; return ``(t, Y, steps, failure, rhs evaluations)`` on the recorded grid."""
+    if meth.name == "cvodes":
+        return _cvodes(model, rhs_function(model, solver, backend), solver, stab, t0, t_end, dt, y0, rtol, atol, record)
+    assert meth.tableau is not None and dt is not None
+    n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
+    times = t0 + dt * np.arange(n_steps + 1)
+    times[-1] = t_end
+    step, run = _compiled_run(model, solver, backend, meth, stab, n_steps)
+    h, s = np.diff(times)[None, :], np.array(stab.stab)
+    try:
+        Ys, bounds = run(y0, times[:-1][None, :], h, s)
+        Y = np.vstack([y0[None, :], np.array(Ys).T])
+        bounds = np.array(bounds).ravel()
+    except RuntimeError:  # a QP plugin refused non-finite data somewhere: redo step by step to keep the prefix
+        Y, bounds = _step_by_step(step, y0, times, s)
+    failure: Exception | None = None
+    finite = np.isfinite(Y).all(axis=1)
+    if Y.shape[0] < times.size or not finite.all():
+        first = int(np.argmin(finite)) if not finite.all() else Y.shape[0]
+        Y, times = Y[:first], times[:first]
+        failure = _diagnose(model, solver, backend, times[-1], Y[-1], times[-1] + dt)
+    low = _margin_failure(model, times[: bounds.size], bounds[: times.size])
+    if low is not None and low[0] > 0:  # a state whose margin vanished is not kept, nor anything after it
+        Y, times, failure = Y[: low[0]], times[: low[0]], low[1]
+    if np.isscalar(record):
+        keep = _record_indices(times.size - 1, record)
+    else:  # after a failure only the requested times that were reached can be kept
+        wanted = np.asarray(record, float)
+        keep = _on_grid(times, wanted[wanted <= times[-1] + 1e-12] if failure else wanted)
+    steps = times.size - 1
+    return times[keep], Y[keep], steps, failure, steps * len(meth.tableau.c)
+
+
+def _compiled_run(
+    model: Model, solver: str, backend: str | None, meth: _methods.Method, stab: Stabilization, n_steps: int
+) -> tuple[ca.Function, ca.Function]:
+    """The step and the whole-run ``mapaccum`` function, built once per model and setting and kept."""
+    cache: dict[Any, Any] = model.__dict__.setdefault("_compiled_runs", {})
+    key = (solver, backend, meth.name, stab.project)
+    if key not in cache:
+        assert meth.tableau is not None
+        cache[key] = (_rk_step(model, rhs_function(model, solver, backend), meth.tableau, stab), {})
+    step, runs = cache[key]
+    if n_steps not in runs:
+        runs[n_steps] = step.mapaccum("run", n_steps)
+    return step, runs[n_steps]
+
+
+def _step_by_step(
+    step: ca.Function, y0: np.ndarray, times: np.ndarray, stab: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    ys, bounds = [y0], []
+    for t, t_next in zip(times[:-1], times[1:], strict=True):
+        try:
+            y, bound = step(ys[-1], t, t_next - t, stab)
+        except RuntimeError:
+            break
+        ys.append(np.array(y).ravel())
+        bounds.append(float(bound))
+        if not np.isfinite(ys[-1]).all():
+            break
+    return np.array(ys), np.array(bounds)
+
+
+def _diagnose(model: Model, solver: str, backend: str | None, t: float, y: np.ndarray, t_next: float) -> Exception:
+    """Name what failed in the step after the last good state ``y`` at ``t``."""
+    from .rhs import RightHandSide
+
+    rhs = RightHandSide(model, solver, backend, Stabilization())
+    try:
+        rhs.evaluate(t, y)
+    except GaussppError as exc:
+        return exc
+    return NonFiniteError(
+        f"the state became NaN or inf in the step from t={t:.6g} to t={t_next:.6g}: a stage of the step failed "
+        "(unrealizable, mass matrix not positive definite, or unstable for this dt); reduce dt or use a stiff method"
+    )
+
+
+def _record_indices(last: int, every: Any) -> np.ndarray:
+    idx = np.arange(0, last + 1, max(int(every), 1))
+    return idx if idx[-1] == last else np.append(idx, last)
+
+
+def _on_grid(times: np.ndarray, record: Any) -> np.ndarray:
+    wanted = np.asarray(record, float)
+    idx = np.searchsorted(times, wanted - 1e-12)
+    if np.any(idx >= times.size) or np.any(np.abs(times[np.minimum(idx, times.size - 1)] - wanted) > 1e-9):
+        raise InputError("record times must lie on the fixed-step grid t0 + i·dt within [t0, t_end]")
+    return idx
+
+
+def _cvodes(
+    model: Model,
+    F: ca.Function,
+    solver: str,
+    stab: Stabilization,
+    t0: float,
+    t_end: float,
+    dt: float | None,
+    y0: np.ndarray,
+    rtol: float,
+    atol: float,
+    record: Any,
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int]:
+    if solver != "direct":
+        raise InputError("method='cvodes' needs solver='direct': CVODES differentiates the right-hand side")
+    if stab.project:
+        raise InputError("method='cvodes' cannot project between its internal steps; use stabilize='baumgarte'")
+    if np.isscalar(record):
+        grid = np.arange(t0, t_end, dt) if dt else np.linspace(t0, t_end, 201)
+        grid = np.append(grid[grid < t_end], t_end)
+    else:
+        grid = np.unique(np.concatenate([[t0], np.asarray(record, float)]))
+    y, t, s = ca.MX.sym("y", y0.size), ca.MX.sym("t"), ca.MX.sym("stab", 2)
+    dae = {"x": y, "t": t, "p": s, "ode": F(t, y, s)}
+    opts: dict[str, Any] = {
+        "abstol": atol,
+        "reltol": rtol,
+        "max_num_steps": MAX_CVODES_STEPS,
+        "disable_internal_warnings": True,
+    }
+    if dt:  # as for scipy's methods: dt is the first and the largest step
+        opts.update(step0=dt, max_step_size=dt)
+
+    def run(upto: int) -> tuple[np.ndarray, ca.Function]:
+        integrator = ca.integrator("cvodes", "cvodes", dae, t0, grid[1 : upto + 1], opts)
+        with stdout_silenced():  # SUNDIALS prints its own failure report
+            return np.array(integrator(x0=y0, p=np.array(stab.stab))["xf"]).T, integrator
+
+    try:
+        xf, integrator = run(grid.size - 1)
+    except RuntimeError as exc:
+        # keep what can be kept: the longest prefix of the output grid that CVODES completes
+        good, bad = 0, grid.size - 1
+        while bad - good > 1:
+            mid = (good + bad) // 2
+            try:
+                run(mid)
+                good = mid
+            except RuntimeError:
+                bad = mid
+        prefix = run(good)[0] if good else np.zeros((0, y0.size))
+        failure = IntegrationError(
+            f"CVODES stopped between t={grid[good]:.6g} and t={grid[bad]:.6g} ({str(exc).strip().splitlines()[-1]}); "
+            "near a singular or very stiff state — check the realizability margin there"
+        )
+        return grid[: good + 1], np.vstack([y0[None, :], prefix]), 0, failure, 0
+    stats = integrator.stats()
+    steps = int(stats.get("nsteps", 0)) if isinstance(stats, dict) else 0
+    evaluations = int(stats.get("nfevals", 0)) if isinstance(stats, dict) else 0
+    Y = np.vstack([y0[None, :], xf])
+    return grid, Y, steps, None, evaluations

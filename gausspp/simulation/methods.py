@@ -1,0 +1,116 @@
+"""Integration methods: a registry of names with their declared order and lane.
+
+Three lanes run the same right-hand side (the step of docs/theory.md §2–3 plus kinematics):
+
+* ``python`` — fixed-step schemes stepped from Python, one compiled step call per stage;
+* ``scipy`` — scipy's adaptive and stiff ``OdeSolver`` classes (RK45, DOP853, Radau, BDF), the
+  step as right-hand side;
+* ``compiled`` — the whole right-hand side is one casadi graph: RK4 over the whole run in a
+  single ``mapaccum`` call, or CVODES (BDF) on the direct-path right-hand side.
+
+Runge–Kutta methods are coefficient data (:class:`Tableau`), used by the Python and the
+compiled lanes alike.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import UnknownNameError
+
+
+@dataclass(frozen=True)
+class Tableau:
+    """An explicit Runge–Kutta method: ``c``, ``A`` (strictly lower triangular), ``b``."""
+
+    c: tuple[float, ...]
+    A: tuple[tuple[float, ...], ...]
+    b: tuple[float, ...]
+
+
+RK4 = Tableau(
+    c=(0.0, 0.5, 0.5, 1.0),
+    A=((), (0.5,), (0.0, 0.5), (0.0, 0.0, 1.0)),
+    b=(1 / 6, 1 / 3, 1 / 3, 1 / 6),
+)
+
+
+@dataclass(frozen=True)
+class Method:
+    """An integration method.
+
+    Attributes
+    ----------
+    name : str
+    order : int
+        Declared order of convergence in the step size, measured with the step imposed (``dt``
+        with loose tolerances for adaptive methods) — the test suite fits it for every method.
+        Variable-order BDF codes (scipy's BDF, CVODES) do not raise their order when the step is
+        imposed, so they declare 1; with their own step control they behave as tolerance-
+        proportional methods.
+    lane : {"python", "scipy", "compiled"}
+    adaptive : bool
+        True if the step size is chosen by an error estimate (``rtol``, ``atol``).
+    description : str
+    tableau : Tableau or None
+        For explicit Runge–Kutta methods.
+    """
+
+    name: str
+    order: int
+    lane: str
+    adaptive: bool
+    description: str
+    tableau: Tableau | None = None
+
+
+METHODS: dict[str, Method] = {
+    m.name: m
+    for m in (
+        Method("rk4", 4, "python", False, "classical Runge–Kutta, fixed step", RK4),
+        Method(
+            "symplectic-euler",
+            1,
+            "python",
+            False,
+            "semi-implicit Euler: v first, then q with the new v; symplectic for ideal holonomic systems",
+        ),
+        Method("RK45", 5, "scipy", True, "scipy Dormand–Prince 5(4), adaptive"),
+        Method("DOP853", 8, "scipy", True, "scipy Dormand–Prince 8(5,3), adaptive"),
+        Method("Radau", 5, "scipy", True, "scipy Radau IIA, implicit, stiff"),
+        Method("BDF", 1, "scipy", True, "scipy variable-order BDF, stiff; stays at order 1 when the step is imposed"),
+        Method("rk4-compiled", 4, "compiled", False, "RK4 with the whole run in one casadi mapaccum call", RK4),
+        Method(
+            "cvodes",
+            1,
+            "compiled",
+            True,
+            "SUNDIALS CVODES variable-order BDF via casadi (direct path); stays at order 1 when the step is imposed",
+        ),
+    )
+}
+
+
+def get(name: str | Method) -> Method:
+    """The method for ``name`` (or an instance unchanged); unknown names list the valid ones."""
+    if isinstance(name, Method):
+        return name
+    if name not in METHODS:
+        raise UnknownNameError(f"method={name!r} is unknown; valid methods: {list(METHODS)}")
+    return METHODS[name]
+
+
+def names() -> list[str]:
+    """Every method name."""
+    return list(METHODS)
+
+
+def rk_step(tableau: Tableau, f, t: float, y: np.ndarray, h: float) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """One explicit Runge–Kutta step ``y(t) → y(t + h)`` of ``y' = f(t, y)`` (numpy)."""
+    stages: list[np.ndarray] = []
+    for c, row in zip(tableau.c, tableau.A, strict=True):
+        yi = y + h * sum((a * k for a, k in zip(row, stages, strict=False) if a), np.zeros_like(y))
+        stages.append(f(t + c * h, yi))
+    return y + h * sum((b * k for b, k in zip(tableau.b, stages, strict=True) if b), np.zeros_like(y))

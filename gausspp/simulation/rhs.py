@@ -1,0 +1,137 @@
+"""The right-hand side ``y' = F(t, y)`` of a simulation, ``y = (q, v, λ, W_R, W_F)``.
+
+One compiled step call per evaluation (a buffer-bound kernel); cheap checks on the hot path,
+the full diagnosis of :mod:`gausspp.step.outcome` only when something is wrong.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import NonFiniteError
+from ..model.model import Model
+from ..step import qp
+from ..step.outcome import QP_TOLERANCE, Where, evaluation_failed, step_margin, to_result
+from .drift import Stabilization
+
+
+class RightHandSide:
+    """``F(t, y)`` for a model, a step solver and a stabilization; counts its evaluations."""
+
+    #: Whether the realizability margin of its steps means something (see :class:`GeneralRightHandSide`).
+    margin_checked = True
+
+    def __init__(self, model: Model, solver: str, backend: str | None, stab: Stabilization) -> None:
+        self.model = model
+        self.kernel = model.kernel(solver, backend)
+        self.solver = "direct" if solver == "direct" else qp.get(backend).name
+        self.stab = np.array(stab.stab, float)
+        self.evaluations = 0
+        m = model
+        self._slices = (slice(0, m.nq), slice(m.nq, m.nq + m.nv), slice(m.nq + m.nv, m.nq + m.nv + m.n_lam))
+        self._lam_cols = np.array(model.lam_columns, dtype=int)
+
+    def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
+        """Evaluate the step at ``(t, y)``; raise a project error if it fails."""
+        sq, sv, sl = self._slices
+        inputs = self.kernel.inputs
+        inputs[0][0] = t
+        inputs[1][:], inputs[2][:], inputs[3][:] = y[sq], y[sv], y[sl]
+        inputs[4][:] = self.stab if stabilized else 0.0
+        self.evaluations += 1
+        try:
+            self.kernel.evaluate()
+        except RuntimeError as exc:  # casadi refused to evaluate: explain it from the step's data
+            m = self.model
+            q, v, lam = y[sq].copy(), y[sv].copy(), y[sl].copy()
+            where = Where(float(t), self.solver, m.groups, lambda: m.step_data(t, q, v, lam))
+            raise evaluation_failed(exc, where, margin_error=m.margin_error) from None
+        out = self.kernel.result()
+        ok = out["pivot"][0] > 0 and np.isfinite(out["checksum"][0]) and out["qp_primal"][0] <= QP_TOLERANCE
+        if ok:  # the realizability margin, at every evaluation (docs/theory.md §2): σ_min of the normalized S
+            ok = step_margin(out["S_norm"], self.model.k, self.model.m) >= self.model.margin_error
+        if not ok:  # diagnose: raises the project error that explains the failure
+            size = float(np.max(np.abs(y)))
+            if not size < 1e100:
+                raise NonFiniteError(
+                    f"the state diverged at t={t:.6g} (largest component {size:.3g}): the integration is unstable; "
+                    "reduce dt or use a stiff method (Radau, BDF, cvodes)"
+                )
+            m = self.model
+            q, v, lam = y[sq].copy(), y[sv].copy(), y[sl].copy()
+            where = Where(float(t), self.solver, m.groups, lambda: m.step_data(t, q, v, lam))
+            to_result(dict(out), where, margin_warn=0.0, margin_error=m.margin_error)
+        return out
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        out = self.evaluate(t, y)
+        u = out["u"]
+        return np.concatenate([out["qdot"], out["a"], u[self._lam_cols], out["power_reaction"], out["power_forces"]])
+
+    def qdot(self, t: float, y: np.ndarray) -> np.ndarray:
+        """The kinematics ``q̇ = K(q, v, t)`` at ``y`` (one step evaluation)."""
+        return np.array(self.evaluate(t, y)["qdot"])
+
+
+class GeneralRightHandSide:
+    """``F(t, y)`` through the general Gauss QP (:meth:`Model.general_step`): bounded actuators and
+    redundant constraint rows. One numeric QP per evaluation, from Python (tens to hundreds of µs)."""
+
+    kernel = None
+
+    def __init__(self, model: Model, backend: str | None, stab: Stabilization, *, margin_checked: bool = True) -> None:
+        from ..step.general import check_backend
+
+        self.model = model
+        self.backend = check_backend(backend)
+        self.solver = f"gauss-qp:{self.backend}"
+        self.stab = np.array(stab.stab, float)
+        self.evaluations = 0
+        m = model
+        self._slices = (slice(0, m.nq), slice(m.nq, m.nq + m.nv), slice(m.nq + m.nv, m.nq + m.nv + m.n_lam))
+        self._lam_cols = np.array(model.lam_columns, dtype=int)
+        #: Whether the realizability margin says anything (not for redundant rows, where it is 0 by design).
+        self.margin_checked = margin_checked
+
+    def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
+        """Evaluate the step at ``(t, y)``; raise a project error if it fails."""
+        sq, sv, sl = self._slices
+        self.evaluations += 1
+        size = float(np.max(np.abs(y)))
+        if not size < 1e100:
+            raise NonFiniteError(
+                f"the state diverged at t={t:.6g} (largest component {size:.3g}): the integration is unstable; "
+                "reduce dt or use a stiff method"
+            )
+        m = self.model
+        res, _, extras = m.general_step_full(
+            float(t),
+            y[sq],
+            y[sv],
+            y[sl],
+            self.backend,
+            self.stab if stabilized else np.zeros(2),
+        )
+        return {
+            "a": res.a,
+            "u": res.u,
+            "reaction": res.reaction,
+            "compulsion": np.array([res.compulsion]),
+            "Phi": res.constraint_value,
+            "tracking_error": np.array([res.tracking_error]),
+            "saturated": np.asarray(res.saturated, bool),
+            **extras,
+        }
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        out = self.evaluate(t, y)
+        u = out["u"]
+        return np.concatenate([out["qdot"], out["a"], u[self._lam_cols], out["power_reaction"], out["power_forces"]])
+
+    def qdot(self, t: float, y: np.ndarray) -> np.ndarray:
+        """The kinematics ``q̇ = K(q, v, t)`` at ``y``."""
+        return np.array(self.evaluate(t, y)["qdot"])
+
+
+#: Either right-hand side (the compiled step, or the general QP's).
+AnyRightHandSide = RightHandSide | GeneralRightHandSide

@@ -1,0 +1,131 @@
+"""A step's data as numbers, and solving it without a model.
+
+:class:`StepProblem` holds ``A, f, r₀, J, φ, D`` of docs/theory.md §2 at one instant. It is what
+:meth:`Model.step_data` returns and what :func:`solve` takes, so users (and the property
+tests) can pose a step from matrices they already have. :func:`solve` compiles one kernel
+per shape and solver, the same code a model's step runs.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ..errors import InputError, NonFiniteError, ShapeError
+from . import qp
+from .expressions import StepExpressions
+from .kernel import Kernel, build_kernel
+from .outcome import Group, Where, evaluation_failed, to_result
+from .results import StepResult
+
+
+@dataclass(frozen=True)
+class StepProblem:
+    """``A q̈ = f + r₀ + D u``, ``J q̈ = φ`` at one instant.
+
+    Attributes
+    ----------
+    A : (n, n) array     kinetic-energy (mass) matrix, symmetric positive definite
+    f : (n,) array       ``F − h``
+    r0 : (n,) array      known part of the reaction
+    J : (k, n) array     ``∂Φ/∂v``
+    phi : (k,) array     right-hand side of ``J q̈ = φ``
+    D : (n, m) array     reaction directions
+    Phi : (k,) array     constraint value at the state
+    """
+
+    A: np.ndarray
+    f: np.ndarray
+    r0: np.ndarray
+    J: np.ndarray
+    phi: np.ndarray
+    D: np.ndarray
+    Phi: np.ndarray
+
+    @classmethod
+    def create(
+        cls,
+        A: object,
+        f: object,
+        J: object,
+        phi: object,
+        D: object | None = None,
+        r0: object | None = None,
+    ) -> StepProblem:
+        """Check shapes and values; ``D`` defaults to ``Jᵀ`` (ideal), ``r0`` to zero."""
+        A_ = _array("A", A, 2)
+        n = A_.shape[0]
+        if A_.shape != (n, n):
+            raise ShapeError(f"A must be square, got shape {A_.shape}")
+        J_ = _array("J", J, 2)
+        k = J_.shape[0]
+        if J_.shape[1] != n:
+            raise ShapeError(f"J has shape {J_.shape}, expected ({k}, {n}) to match A")
+        D_ = J_.T.copy() if D is None else _array("D", D, 2)
+        if D_.shape[0] != n:
+            raise ShapeError(f"D has shape {D_.shape}, expected ({n}, m)")
+        f_ = _vector("f", f, n)
+        r0_ = np.zeros(n) if r0 is None else _vector("r0", r0, n)
+        return cls(A=A_, f=f_, r0=r0_, J=J_, phi=_vector("phi", phi, k), D=D_, Phi=np.zeros(k))
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """``(n, k, m)``: coordinates, constraint rows, reaction directions."""
+        return self.A.shape[0], self.J.shape[0], self.D.shape[1]
+
+
+def _array(name: str, value: object, ndim: int) -> np.ndarray:
+    try:
+        arr = np.array(value, dtype=float, ndmin=ndim)
+    except (TypeError, ValueError) as exc:
+        raise InputError(f"{name} must be numeric: {exc}") from None
+    if arr.ndim != ndim:
+        raise ShapeError(f"{name} must have {ndim} dimensions, got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise NonFiniteError(f"{name} contains NaN or inf")
+    return arr
+
+
+def _vector(name: str, value: object, size: int) -> np.ndarray:
+    arr = _array(name, value, 1).ravel()
+    if arr.shape != (size,):
+        raise ShapeError(f"{name} has {arr.size} entries, expected {size}")
+    return arr
+
+
+@functools.lru_cache(maxsize=64)
+def _kernel(n: int, k: int, m: int, solver: str, backend: str | None) -> Kernel:
+    A, f, r0 = ca.SX.sym("A", n, n), ca.SX.sym("f", n), ca.SX.sym("r0", n)
+    J, phi, D = ca.SX.sym("J", k, n), ca.SX.sym("phi", k), ca.SX.sym("D", n, m)
+    p = StepExpressions(A=A, f=f, r0=r0, J=J, phi=phi, D=D, Phi=ca.SX.zeros(k))
+    return build_kernel("problem", [A, f, r0, J, phi, D], p, solver, qp.get(backend) if solver == "qp" else None)
+
+
+def solve(
+    problem: StepProblem,
+    solver: str = "qp",
+    backend: str | None = None,
+    *,
+    margin_warn: float = 1e-6,
+    margin_error: float = 1e-12,
+) -> StepResult:
+    """Solve one step given as numbers, by the direct formula or the Gauss QP.
+
+    Same checks and result as :meth:`Model.step`; constraint rows are named ``row i``.
+    """
+    n, k, m = problem.shape
+    if solver not in ("qp", "direct"):
+        raise InputError(f"solver={solver!r} is unknown; use 'qp' or 'direct'")
+    name = qp.get(backend).name if solver == "qp" else None
+    kernel = _kernel(n, k, m, solver, name)
+    p = problem
+    groups = [Group(f"row {i}", slice(i, i + 1), slice(i, i + 1) if m == k else slice(0, m), "") for i in range(k)]
+    where = Where(0.0, name or "direct", groups, lambda: problem)
+    try:
+        out = kernel(p.A, p.f, p.r0, p.J, p.phi, p.D)
+    except RuntimeError as exc:
+        raise evaluation_failed(exc, where, margin_error=margin_error) from None
+    return to_result(out, where, margin_warn=margin_warn, margin_error=margin_error)

@@ -1,0 +1,119 @@
+"""The compiled route: casadi's ``conic`` plugins, posed inside the model's casadi graph.
+
+A step that uses one of these backends is a single C call (through ``Function.buffer()``),
+the QP included. Each plugin's options below ask for the accuracy the cross-check against
+the direct solution needs.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import functools
+import os
+import sys
+from collections.abc import Iterator
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ...errors import QPSolveError
+from .base import QPBackend
+
+_QUIET = {"print_iter": False, "print_header": False, "print_info": False}
+
+#: Plugin → (options, one-line description). Tolerances are set for agreement with the direct solve.
+#: Left out: ``ipqp`` (its LDL factorization breaks down on the pendulum's two-row step and returns
+#: NaN), ``hpipm`` (rejects a dense Hessian), and the commercial plugins (cplex, gurobi, mosek, ...).
+PLUGINS: dict[str, tuple[dict[str, Any], str]] = {
+    "qrqp": (dict(_QUIET), "casadi's own active-set QP (sparse QR); round-off accurate, fastest measured"),
+    "daqp": ({}, "dual active-set (DAQP); round-off accurate"),
+    "qpoases": ({"printLevel": "none", "sparse": False}, "online active-set (qpOASES)"),
+    "osqp": (
+        {"osqp": {"verbose": False, "eps_abs": 1e-12, "eps_rel": 1e-12, "polishing": True, "max_iter": 20000}},
+        "operator splitting (OSQP) with polishing",
+    ),
+    "proxqp": ({"proxqp": {"eps_abs": 1e-12, "eps_rel": 0.0}}, "proximal augmented Lagrangian (ProxQP)"),
+    "piqp": ({"piqp": {"eps_abs": 1e-12, "eps_rel": 1e-12}}, "proximal interior point (PIQP)"),
+    "highs": ({"highs": {"output_flag": False}}, "HiGHS (LP/QP); slow and ~1e-8 accurate here"),
+}
+
+
+@contextlib.contextmanager
+def stdout_silenced() -> Iterator[None]:
+    """Some plugins (qpOASES) print a banner from C at set-up; keep the user's terminal clean."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        yield
+        return
+    sys.stdout.flush()
+    saved = os.dup(fd)
+    with open(os.devnull, "w") as null:
+        os.dup2(null.fileno(), fd)
+        try:
+            yield
+        finally:
+            _flush_c_stdout()  # C's stdio buffers what the plugin printed: flush it into /dev/null
+            os.dup2(saved, fd)
+            os.close(saved)
+
+
+def _flush_c_stdout() -> None:
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):  # no C library to reach: nothing buffered there to worry about
+        pass
+
+
+@functools.cache
+def plugin_available(plugin: str) -> bool:
+    """True if casadi on this machine can load ``plugin`` (checked once)."""
+    try:
+        with stdout_silenced():
+            ca.conic("probe", plugin, {"h": ca.Sparsity.dense(1, 1), "a": ca.Sparsity.dense(1, 1)}, PLUGINS[plugin][0])
+    except RuntimeError:
+        return False
+    return True
+
+
+class CasadiConic(QPBackend):
+    """A casadi ``conic`` plugin; the QP becomes a node of the model's graph."""
+
+    compiled = True
+
+    def __init__(self, plugin: str, options: dict[str, Any] | None = None, name: str | None = None) -> None:
+        """``options`` replace the plugin's defaults of :data:`PLUGINS` (give ``name`` to tell them apart)."""
+        self.plugin = plugin
+        self.name = name or f"casadi:{plugin}"
+        self.options = {"error_on_fail": False, **(PLUGINS[plugin][0] if options is None else options)}
+        self.description = PLUGINS[plugin][1]
+
+    @functools.cache  # noqa: B019 - backends are few, long-lived singletons
+    def _conic(self, m: int, k: int) -> ca.Function:
+        with stdout_silenced():
+            return ca.conic(
+                f"gauss_qp_{self.plugin}",
+                self.plugin,
+                {"h": ca.Sparsity.dense(m, m), "a": ca.Sparsity.dense(k, m)},
+                self.options,
+            )
+
+    def graph(self, H: ca.MX, S: ca.MX, rhs: ca.MX) -> tuple[ca.MX, ca.MX]:
+        m, k = H.shape[0], S.shape[0]
+        sol = self._conic(m, k)(h=H, g=ca.MX.zeros(m), a=S, lba=rhs, uba=rhs)
+        return sol["x"], sol["lam_a"]
+
+    def solve(self, H: np.ndarray, S: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        m, k = H.shape[0], S.shape[0]
+        solver = self._conic(m, k)
+        with stdout_silenced():
+            sol = solver(h=H, g=np.zeros(m), a=S, lba=rhs, uba=rhs)
+        u = np.array(sol["x"]).ravel()
+        if not solver.stats().get("success", True) or not np.all(np.isfinite(u)):
+            raise QPSolveError(
+                f"{self.name} did not solve the step QP (status {solver.stats().get('return_status')!r}); "
+                "try another backend or solver='direct'"
+            )
+        return u, np.array(sol["lam_a"]).ravel()

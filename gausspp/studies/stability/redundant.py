@@ -1,0 +1,535 @@
+"""Redundant constraints: rank-deficient constraint Jacobians, on and off the constraint manifold.
+
+Issue 7 and issue 15: ``solver='direct'`` needs independent rows and stops with a
+RealizabilityError saying the rows are redundant and pointing to ``solver='qp'``. ``solver='qp'``
+decides which rows are redundant at the nearest state on the constraint manifold
+(:mod:`gausspp.redundancy`: rows kept in declared order) and solves the step at the actual state
+with the kept rows — the minimal model's rows. So every QP backend returns the minimal model's
+acceleration, on the manifold (with the least-norm multiplier) and off it (the rows there are
+independent by the drift only), and a RealizabilityError ("contradict each other") when the
+dependent rows describe different constraints.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ... import scenes
+from ...errors import GaussppError, RealizabilityError
+from ...model.constraints import Constraint, Holonomic
+from ...model.mechanism import Lagrangian, MassMatrix
+from ...model.model import Model
+from ...simulation.simulate import simulate
+from ...step import qp
+from ...step.realizability import cosines
+from ...step.results import StepResult
+from ._case import Case, Solver, fmt, quiet_c_output, realizability_warnings, recorded, relative, solvers
+
+NAME = "redundant constraints"
+WHAT = (
+    "rank-deficient constraint Jacobians: a particle on a circle with the circle written twice (one step by the "
+    "direct formula and every QP backend); the pendulum's two pins plus the distance constraint they imply "
+    "(dependent on the constraint manifold): along the manifold (the default QP at every angle, every backend at "
+    "a few), and off it by drifts δ = 1e-10…1e-2 at φ = 0.7 (the rows become independent) and φ = 0 (they stay "
+    "dependent) and by δ = 1e-8…3e-8 over the angles, every QP backend and the direct formula; dependent rows "
+    "that contradict each other (two velocity constraints with the same row and different right-hand sides, two "
+    "positions x = 0 and x = 0.5); simulate with solver='direct' and with solver='qp' (rk4 with and without "
+    "projection, DOP853, and from off the manifold with projection)"
+)
+EXPECTED = (
+    "solver='direct': a RealizabilityError naming the constraints, saying they are redundant and pointing to "
+    "solver='qp'; solver='qp' with every backend: the minimal model's acceleration — on the manifold to 1e-10 with "
+    "the least-norm multiplier (circle twice: λ_min·(1, 2)/5, numpy's pinv solution), off it by δ to "
+    "1e-12 + 2δ (the minimal model's rows, at the same state) — never an error and never another motion; dependent "
+    "rows that contradict each other: a RealizabilityError; simulate: solver='direct' fails naming the "
+    "redundancy, solver='qp' follows the minimal model's run"
+)
+
+_PINS = ("pin-x", "pin-z", "distance")
+_CIRCLES = ("circle", "circle again")
+_DRIFTS = (1e-10, 1e-8, 1e-6, 1e-4, 1e-3, 1e-2)
+#: Acceleration and multiplier tolerance (relative) for exactly dependent, consistent rows.
+EXACT_TOL = 1e-10
+#: Off the manifold by δ the answer may differ from the minimal model's at the same state by ``OFF_FLOOR +
+#: OFF_PER_DRIFT·δ`` (relative): round-off, plus no more than the drift itself makes uncertain.
+OFF_FLOOR, OFF_PER_DRIFT = 1e-12, 2.0
+#: Largest relative difference of a simulated trajectory (solver='qp') from the minimal model's.
+SIMULATE_TOL = 1e-8
+#: Drifts of the scan over the angles (formerly the edge of the general QP's rank tolerance).
+_SCAN_DRIFTS = (1e-8, 2e-8, 3e-8)
+#: What solver='direct' adds to its error when the rows are redundant.
+QP_ADVICE = "solver='qp' returns the unique acceleration and the least-norm multiplier"
+
+
+def circle_twice() -> tuple[Model, Model]:
+    """A particle on the unit circle under gravity: the minimal model, and the circle written twice."""
+    body = Lagrangian(n=2, T=lambda q, v, t: 0.5 * ca.sumsqr(v), V=lambda q, t: 9.81 * q[1])
+    circle = Holonomic(lambda q, t: ca.sumsqr(q) - 1.0, name="circle")
+    twice = Holonomic(lambda q, t: 2.0 * (ca.sumsqr(q) - 1.0), name="circle again")
+    return Model(body, [circle]), Model(body, [circle, twice])
+
+
+def circle_state() -> tuple[np.ndarray, np.ndarray]:
+    """The circle's test state: ``q = (cos 0.3, sin 0.3)``, ``v = 1.5·(−sin 0.3, cos 0.3)`` (on the circle)."""
+    return np.array([math.cos(0.3), math.sin(0.3)]), 1.5 * np.array([-math.sin(0.3), math.cos(0.3)])
+
+
+def pendulum_with_distance() -> tuple[scenes.Scene, Model]:
+    """The pendulum scene and the same body with its pins plus the distance constraint they imply."""
+    scene = scenes.get("pendulum")
+    L = float(scene.params["L"])
+    distance = Holonomic(lambda q, t: q[0] ** 2 + q[1] ** 2 - L**2, name="distance")
+    return scene, Model(scene.model.mechanism, [*scene.model.constraints, distance])
+
+
+def pendulum_state(phi: float, omega: float, stretch: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """``q = (cos φ·(1 + stretch), sin φ, φ)``, ``v = ω·(−sin φ, cos φ, 1)``: on the manifold iff ``stretch = 0``."""
+    c, s = math.cos(phi), math.sin(phi)
+    return np.array([c * (1.0 + stretch), s, phi]), np.array([-s * omega, c * omega, omega])
+
+
+def two_masses(constraints: list[Constraint]) -> Model:
+    """Two masses ``diag(1, 2)`` on a line, the second pulled by a unit force, with ``constraints``."""
+    body = MassMatrix(2, A=lambda q, t: np.diag([1.0, 2.0]), f=lambda q, v, t: ca.vertcat(0.0, 1.0))
+    return Model(body, constraints)
+
+
+def contradicting_models() -> dict[str, tuple[Model, np.ndarray, np.ndarray, float]]:
+    """Dependent rows that describe different constraints, each with a state ``(q, v, t)`` to step at.
+
+    ``speeds``: ``v₁ − v₀ = 0`` and ``v₁ − v₀ − t = 0`` (the same row, right-hand sides that disagree at the
+    acceleration level everywhere and at the velocity level for ``t ≠ 0``); ``positions``: ``x₀ = 0`` and
+    ``x₀ = 0.5`` (no state satisfies both; their velocity and acceleration rows agree).
+    """
+    speeds = two_masses(
+        [
+            Constraint(lambda q, v, t: v[1] - v[0], name="equal speeds"),
+            Constraint(lambda q, v, t: v[1] - v[0] - t, name="speeds apart"),
+        ]
+    )
+    positions = two_masses(
+        [Holonomic(lambda q, t: q[0], name="x at 0"), Holonomic(lambda q, t: q[0] - 0.5, name="x at 0.5")]
+    )
+    zero = np.zeros(2)
+    return {
+        "speeds at t = 0": (speeds, zero, zero, 0.0),
+        "speeds at t = 0.5": (speeds, zero, np.array([0.0, 0.5]), 0.5),
+        "positions at x = 0.25": (positions, np.array([0.25, 0.0]), zero, 0.0),
+        "positions at x = 0": (positions, zero, zero, 0.0),
+    }
+
+
+def least_norm_multiplier(model: Model, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """The least-norm ``u`` with ``D u = A a − f − r₀`` (numpy's pseudo-inverse, singular values < 1e-10·max cut)."""
+    d = model.step_data(0.0, q, v)
+    return np.linalg.pinv(d.D, rcond=1e-10) @ (d.A @ a - d.f - d.r0)
+
+
+def _attempt(
+    model: Model, q: np.ndarray, v: np.ndarray, solver: str, backend: str | None, t: float = 0.0
+) -> tuple[Any, bool]:
+    """One step at ``t``: (the result or the exception, whether a RealizabilityWarning came with it)."""
+    with recorded() as caught, quiet_c_output():
+        try:
+            out: StepResult | Exception = model.step(t, q, v, solver=solver, backend=backend)
+        except Exception as exc:  # noqa: BLE001 - judged by the caller; a non-project exception is a finding
+            out = exc
+    return out, bool(realizability_warnings(caught))
+
+
+def _clear(out: Any, names: tuple[str, ...]) -> bool:
+    """A RealizabilityError that names every constraint and says they are redundant."""
+    return isinstance(out, RealizabilityError) and "redundant" in str(out) and all(repr(n) in str(out) for n in names)
+
+
+def _clear_direct(out: Any, names: tuple[str, ...]) -> bool:
+    """The direct formula's error: clear (:func:`_clear`), and pointing to solver='qp'."""
+    return _clear(out, names) and QP_ADVICE in str(out)
+
+
+def _refuses_redundancy(out: Any) -> bool:
+    """The direct formula's refusal, whether or not its message names the constraints."""
+    return isinstance(out, RealizabilityError) and "redundant" in str(out) and QP_ADVICE in str(out)
+
+
+def _kind(out: Any) -> str:
+    return "answer" if isinstance(out, StepResult) else type(out).__name__
+
+
+@dataclass
+class _Section:
+    """What one part of the study measured, saw and found wrong."""
+
+    figures: dict[str, float] = field(default_factory=dict)
+    observed: str = ""
+    problems: list[str] = field(default_factory=list)
+
+
+@dataclass
+class _Findings:
+    """Outcomes every section reports into: wrong answers and exceptions that are not the project's."""
+
+    wrong_answers: list[str] = field(default_factory=list)
+    non_project: list[str] = field(default_factory=list)
+
+    def judge(self, out: Any, ref: np.ndarray, tol: float, where: str) -> float | None:
+        """An answer's relative error against ``ref`` (recorded as wrong above ``tol``); ``None`` for an error."""
+        if isinstance(out, StepResult):
+            err = relative(out.a, ref)
+            if err > tol:
+                self.wrong_answers.append(f"{where}: error {fmt(err)} > {fmt(tol)}, margin {out.margin:.2g}")
+            return err
+        if not isinstance(out, GaussppError):
+            self.non_project.append(f"{where}: {type(out).__name__}: {out}")
+        return None
+
+
+def _qp_ways() -> list[Solver]:
+    """Every QP backend installed here (the compiled ones and qpsolvers')."""
+    return solvers(qp.names())[1:]
+
+
+def _off_tol(drift: float) -> float:
+    return OFF_FLOOR + OFF_PER_DRIFT * drift
+
+
+def _duplicates(found: _Findings) -> _Section:
+    """A. The circle written twice (exactly dependent rows, everywhere): the direct formula and every QP backend."""
+    minimal, doubled = circle_twice()
+    q, v = circle_state()
+    ref_step = minimal.step(0.0, q, v, solver="direct")
+    ref, lam_min = ref_step.a, float(ref_step.u[0])
+    # D = [d, 2d] (d the minimal model's column): D u = d (u₁ + 2u₂) = d λ_min; least norm: u = λ_min (1, 2)/5
+    derived = lam_min * np.array([1.0, 2.0]) / 5.0
+    data = doubled.step_data(0.0, q, v)
+    duplicate_cosines = cosines(data.A, data.J, data.D)
+    ways = _qp_ways()
+    direct_out, _ = _attempt(doubled, q, v, "direct", None)
+    found.judge(direct_out, ref, EXACT_TOL, "circle twice, direct")
+    bad: dict[str, str] = {}  # QP backend → what is wrong with its answer
+    err_a = err_u = 0.0
+    routes: set[str] = set()
+    warned_a = 0
+    for label, solver, backend in ways:
+        out, warned = _attempt(doubled, q, v, solver, backend)
+        found.judge(out, ref, EXACT_TOL, f"circle twice, {label}")
+        warned_a += warned
+        if not isinstance(out, StepResult):
+            bad[label] = f"{_kind(out)}: {out}"
+            continue
+        routes.add(out.solver)
+        ea, eu = relative(out.a, ref), relative(out.u, derived)
+        err_a, err_u = max(err_a, ea), max(err_u, eu)
+        if ea > EXACT_TOL or eu > EXACT_TOL or not out.solver.startswith("gauss-qp:"):
+            bad[label] = f"answer by {out.solver}: acceleration {fmt(ea)}, multiplier {fmt(eu)} off"
+    clear = _clear_direct(direct_out, _CIRCLES)
+    f = dict(
+        duplicate_solvers=float(len(ways) + 1),
+        duplicate_direct_clear_error=float(clear),
+        duplicate_qp_backends=float(len(ways)),
+        duplicate_qp_right_answers=float(len(ways) - len(bad)),
+        duplicate_qp_warned_answers=float(warned_a),
+        duplicate_max_acceleration_error=err_a,
+        duplicate_max_multiplier_error=err_u,
+        duplicate_least_norm_vs_pinv=relative(derived, least_norm_multiplier(doubled, q, v, ref)),
+        duplicate_minimal_multiplier=lam_min,
+        duplicate_cosine_min=float(duplicate_cosines.min()),
+        duplicate_cosine_max=float(duplicate_cosines.max()),
+    )
+    observed = (
+        "Circle written twice: direct raises "
+        + ("the clear RealizabilityError" if clear else "something else")
+        + f" (“{direct_out}”); {len(ways) - len(bad)}/{len(ways)} QP backends answer through "
+        + ", ".join(sorted(routes))
+        + f" with the minimal model's acceleration (worst {fmt(err_a)}) and the least-norm multiplier "
+        f"λ_min·(1, 2)/5 = ({derived[0]:.6g}, {derived[1]:.6g}) (λ_min = {lam_min:.6g}; worst {fmt(err_u)}; numpy's "
+        f"pinv solution differs by {fmt(f['duplicate_least_norm_vs_pinv'])}), {warned_a} with a RealizabilityWarning"
+        + ("; wrong: " + "; ".join(f"{k}: {o}" for k, o in bad.items()) if bad else "")
+        + f". realizability.cosines there: {fmt(f['duplicate_cosine_max'])}, {fmt(f['duplicate_cosine_min'])} (the "
+        "smallest is the documented 0; for more than one constraint the values are singular values of a matrix of "
+        "cosines, and the largest exceeds 1)."
+    )
+    problems = []
+    if not clear:
+        problems.append(f"Circle written twice, solver='direct': not the clear RealizabilityError: {direct_out!r}")
+    if bad:
+        problems.append(
+            "Exactly dependent, consistent rows with solver='qp': not every backend returns the minimal model's "
+            "acceleration with the least-norm multiplier — "
+            + "; ".join(f"{b}: {o[:200]}" for b, o in bad.items())
+            + ". Repro: `_, m = gausspp.studies.stability.redundant.circle_twice()`; q, v = "
+            f"gausspp.studies.stability.redundant.circle_state(); m.step(0, q, v, backend='{next(iter(bad))}')."
+        )
+    return _Section(f, observed, problems)
+
+
+def _on_manifold(found: _Findings, quick: bool) -> _Section:
+    """B. Pins + distance along the manifold: dependent rows, in floating point only nearly so."""
+    scene, with_distance = pendulum_with_distance()
+    grid = np.linspace(-3.0, 3.0, 61 if quick else 241)
+    every_backend_at = set(grid[:: 20 if quick else 40].tolist())
+    backends = [None, *(b for _, _, b in _qp_ways())]
+    direct_clear = answers = default_answers = steps = backend_steps = 0
+    max_err = max_u = 0.0
+    unclear: list[str] = []
+    for phi in grid:
+        q, v = pendulum_state(float(phi), 1.3)
+        ref = scene.model.step(0.0, q, v, solver="direct").a
+        out, _ = _attempt(with_distance, q, v, "direct", None)
+        found.judge(out, ref, EXACT_TOL, f"pins + distance on the manifold at φ = {phi:.2f}, direct")
+        direct_clear += _clear_direct(out, _PINS)
+        if not _clear_direct(out, _PINS):
+            unclear.append(f"φ = {phi:.2f}, direct: {_kind(out)}: {out}")
+        for backend in backends if phi in every_backend_at else [None]:
+            out, _ = _attempt(with_distance, q, v, "qp", backend)
+            label = qp.get(backend).name
+            found.judge(out, ref, EXACT_TOL, f"pins + distance on the manifold at φ = {phi:.2f}, {label}")
+            steps += 1
+            backend_steps += backend is not None
+            if isinstance(out, StepResult):
+                answers += 1
+                default_answers += backend is None
+                max_err = max(max_err, relative(out.a, ref))
+                max_u = max(max_u, relative(out.u, least_norm_multiplier(with_distance, q, v, ref)))
+            else:
+                unclear.append(f"φ = {phi:.2f}, {label}: {_kind(out)}: {out}")
+    f = dict(
+        manifold_states=float(grid.size),
+        manifold_direct_clear_errors=float(direct_clear),
+        manifold_qp_steps=float(steps),
+        manifold_qp_backend_steps=float(backend_steps),
+        manifold_qp_answers=float(answers),
+        manifold_default_qp_answers=float(default_answers),
+        manifold_max_error=max_err,
+        manifold_max_multiplier_error=max_u,
+        unclear_manifold_outcomes=float(len(unclear)),
+    )
+    observed = (
+        f"Pins + distance on the manifold ({grid.size} angles): direct raises the clear error at {direct_clear}; "
+        f"the QP ({steps} steps, {backend_steps} of them every backend at {len(every_backend_at)} angles) answers "
+        f"{answers} times ({default_answers}/{grid.size} with the default backend), acceleration within "
+        f"{fmt(max_err)} of the minimal model, multiplier within {fmt(max_u)} of the least-norm one"
+        + (f"; not so: {'; '.join(unclear[:3])}" if unclear else "")
+        + "."
+    )
+    problems = []
+    if unclear or max_u > EXACT_TOL:
+        problems.append(
+            f"Redundant constraints on the manifold: {len(unclear)} steps end neither in the clear error (direct) "
+            f"nor in the minimal model's answer (QP), worst multiplier {fmt(max_u)} off the least-norm one: "
+            + "; ".join(u[:300] for u in unclear[:3])
+        )
+    return _Section(f, observed, problems)
+
+
+def _off_manifold_states(quick: bool) -> list[tuple[float, float]]:
+    """``(φ, δ)``: φ = 0.7 and 0 at the drifts :data:`_DRIFTS`, then a scan of the angles at :data:`_SCAN_DRIFTS`."""
+    drifts = _DRIFTS if quick else tuple(float(d) for d in 10.0 ** np.arange(-12.0, -1.9, 0.5))
+    scan = np.linspace(-3.0, 3.0, 61 if quick else 241)[:: 5 if quick else 1]
+    return [(p, d) for p in (0.7, 0.0) for d in drifts] + [(float(p), d) for p in scan for d in _SCAN_DRIFTS]
+
+
+def _off_manifold(found: _Findings, quick: bool) -> _Section:
+    """C. Pins + distance off the manifold by δ: every QP backend must give the minimal model's acceleration.
+
+    At φ = 0.7 the distance row becomes independent of the pins (``J A⁻¹ Jᵀ`` nearly singular, margin ∝ δ²); at
+    φ = 0 it stays parallel to pin-x's row and its right-hand side disagrees by the drift.
+    """
+    scene, with_distance = pendulum_with_distance()
+    states = _off_manifold_states(quick)
+    ways = _qp_ways()
+    errors: dict[str, list[str]] = {}  # QP backend → its errors (consistent rows: each is a failure)
+    direct_refusals = direct_named = answers = 0
+    direct_other: list[str] = []
+    max_err = max_ratio = 0.0
+    for phi, drift in states:
+        q, v = pendulum_state(phi, 1.3, drift)
+        ref = scene.model.step(0.0, q, v, solver="direct").a
+        where = f"pins + distance {drift:.0e} off the manifold at φ = {phi:.2f}"
+        out, _ = _attempt(with_distance, q, v, "direct", None)
+        found.judge(out, ref, _off_tol(drift), f"{where}, direct")
+        direct_refusals += _refuses_redundancy(out)
+        direct_named += _clear_direct(out, _PINS)
+        if not _refuses_redundancy(out):
+            direct_other.append(f"{where}: {_kind(out)}: {out}")
+        for label, solver, backend in ways:
+            out, _ = _attempt(with_distance, q, v, solver, backend)
+            err = found.judge(out, ref, _off_tol(drift), f"{where}, {label}")
+            if err is None:
+                errors.setdefault(label, []).append(f"{where}: {_kind(out)}: {out}")
+                continue
+            answers += 1
+            max_err, max_ratio = max(max_err, err), max(max_ratio, err / drift)
+    steps = len(states) * len(ways)
+    f = dict(
+        off_manifold_states=float(len(states)),
+        off_manifold_qp_steps=float(steps),
+        off_manifold_qp_answers=float(answers),
+        off_manifold_qp_errors=float(steps - answers),
+        off_manifold_max_error=max_err,
+        off_manifold_error_over_drift=max_ratio,
+        off_manifold_direct_refusals=float(direct_refusals),
+        off_manifold_direct_errors_naming_constraints=float(direct_named),
+    )
+    observed = (
+        f"Off the manifold ({len(states)} states: φ = 0.7 and 0 at δ = {_DRIFTS[0]:.0e}…{_DRIFTS[-1]:.0e}, and "
+        f"δ = {', '.join(f'{d:.0e}' for d in _SCAN_DRIFTS)} over the angles): the {len(ways)} QP backends answer "
+        f"{answers}/{steps} times, within {fmt(max_err)} of the minimal model at the same state (≤ {fmt(max_ratio)}·δ)"
+        + (
+            "; errors: " + "; ".join(f"{b}: {len(e)} (first: {e[0][:200]})" for b, e in errors.items())
+            if errors
+            else ""
+        )
+        + f". Direct refuses the redundant rows {direct_refusals}/{len(states)} times, naming the constraints in "
+        f"{direct_named}."
+    )
+    problems = []
+    if errors:
+        problems.append(
+            "Consistent redundant rows off the constraint manifold: a QP backend raises instead of returning the "
+            "minimal model's acceleration — "
+            + "; ".join(f"{b}: {len(e)}/{len(states)} states, e.g. {e[0][:300]}" for b, e in errors.items())
+            + ". Repro: `sc, m = gausspp.studies.stability.redundant.pendulum_with_distance()`; "
+            "q, v = gausspp.studies.stability.redundant.pendulum_state(φ, 1.3, δ); m.step(0, q, v, backend=...)."
+        )
+    if direct_other:
+        problems.append("Off the manifold, solver='direct' does not refuse the redundant rows: " + direct_other[0])
+    if direct_named < direct_refusals:
+        problems.append(
+            f"Off the manifold, {direct_refusals - direct_named} of solver='direct''s {direct_refusals} refusals do "
+            f"not name the constraints {', '.join(map(repr, _PINS))} in their message (the error's .constraint "
+            "does): Model.step's 'redundant on the constraint manifold' message. Repro: "
+            "`_, m = gausspp.studies.stability.redundant.pendulum_with_distance()`; q, v = "
+            "gausspp.studies.stability.redundant.pendulum_state(0.7, 1.3, 1e-3); m.step(0, q, v, solver='direct')."
+        )
+    return _Section(f, observed, problems)
+
+
+def _contradictions(found: _Findings) -> _Section:
+    """D. Dependent rows that contradict each other: the direct formula and every QP backend must raise."""
+    ways = [("direct", "direct", None), *_qp_ways()]
+    answered: list[str] = []
+    raised = 0
+    for name, (model, q, v, t) in contradicting_models().items():
+        for label, solver, backend in ways:
+            out, _ = _attempt(model, q, v, solver, backend, t)
+            if isinstance(out, RealizabilityError):
+                raised += 1
+            elif isinstance(out, StepResult):
+                answered.append(f"{name}, {label}: a = {np.array2string(out.a, precision=3)}")
+            elif not isinstance(out, GaussppError):
+                found.non_project.append(f"{name}, {label}: {type(out).__name__}: {out}")
+            else:
+                answered.append(f"{name}, {label}: {type(out).__name__}: {str(out)[:160]}")
+    steps = len(contradicting_models()) * len(ways)
+    f = dict(contradiction_steps=float(steps), contradiction_realizability_errors=float(raised))
+    observed = f"Dependent rows that contradict each other: a RealizabilityError in {raised}/{steps} steps" + (
+        f"; not so: {'; '.join(answered[:4])}" if answered else ""
+    )
+    problems = []
+    if answered:
+        problems.append(
+            f"Dependent rows that contradict each other: {len(answered)}/{steps} steps do not raise a "
+            "RealizabilityError — " + "; ".join(answered[:3]) + ". Holonomic rows x₀ = 0 and x₀ = 0.5 have the same "
+            "velocity and acceleration rows; only their positions disagree, and the reference state on the "
+            "manifold (where that is checked) is looked for only when the rows are ambiguous at the state itself "
+            "(gauss_qp.solve_general). Repro: m = gausspp.studies.stability.redundant.contradicting_models()"
+            "['positions at x = 0.25'][0]; m.step(0, [0.25, 0], [0, 0])."
+        )
+    return _Section(f, observed + ".", problems)
+
+
+def _simulations(found: _Findings) -> _Section:
+    """E. simulate: solver='direct' must fail naming the redundancy; solver='qp' must follow the minimal model.
+
+    ``rk4-compiled`` runs the compiled step, which has no general QP: with solver='qp' it must refuse, naming the
+    redundancy. DOP853 is compared at 11 recorded times (its accepted steps may differ).
+    """
+    scene, with_distance = pendulum_with_distance()
+    off_q, off_v = pendulum_state(0.0, 0.0, 1e-3)
+    runs = [
+        ("rk4", None, scene.q0, scene.v0),
+        ("rk4", "project", scene.q0, scene.v0),
+        ("rk4-compiled", "project", scene.q0, scene.v0),
+        ("DOP853", "project", scene.q0, scene.v0),
+        ("rk4", "project", off_q, off_v),
+    ]
+    outcomes: dict[str, str] = {}
+    named = followed = compiled_refused = 0
+    for solver in ("direct", "qp"):
+        for method, stab, q0, v0 in runs:
+            key = f"{method}{' + project' if stab else ''}{' from δ = 1e-3' if q0 is off_q else ''}, {solver}"
+            options: dict[str, Any] = dict(dt=0.01, method=method, solver=solver, stabilize=stab)
+            if method == "DOP853":
+                options["record"] = np.linspace(0.0, 1.0, 11)
+            with recorded(), quiet_c_output():
+                try:
+                    traj = simulate(with_distance, q0, v0, 1.0, **options)
+                    ref = simulate(scene.model, q0, v0, 1.0, **{**options, "solver": "direct"})
+                    err = relative(traj.q, ref.q) if traj.q.shape == ref.q.shape else math.inf
+                    outcomes[key] = f"ran to t = {traj.t[-1]:g}, q within {fmt(err)} of the minimal model"
+                    if solver == "direct" or err > SIMULATE_TOL:
+                        found.wrong_answers.append(f"simulate {key}: {outcomes[key]}")
+                    followed += solver == "qp" and err <= SIMULATE_TOL
+                except GaussppError as exc:
+                    says = "redundant" in str(exc)
+                    outcomes[key] = f"{type(exc).__name__}{' (says redundant)' if says else ''}: {str(exc)[:200]}"
+                    named += solver == "direct" and says
+                    # the compiled integrator has no general QP: its refusal naming the redundancy is right
+                    compiled_refused += solver == "qp" and method == "rk4-compiled" and says
+                except Exception as exc:  # noqa: BLE001 - a non-project exception is itself a finding
+                    outcomes[key] = f"{type(exc).__name__} (not a project error)"
+                    found.non_project.append(f"simulate {key}: {type(exc).__name__}: {exc}")
+    qp_runs = len(runs) - compiled_refused
+    f = dict(
+        simulate_runs=float(len(runs)),
+        simulate_redundancy_named=float(named),
+        simulate_qp_runs=float(qp_runs),
+        simulate_qp_followed_minimal=float(followed),
+        simulate_compiled_qp_refusals=float(compiled_refused),
+    )
+    observed = "simulate: " + "; ".join(f"{k}: {v}" for k, v in outcomes.items()) + "."
+    problems = []
+    if named != len(runs):
+        problems.append("simulate with solver='direct' and redundant constraints: " + str(outcomes))
+    if followed != qp_runs or compiled_refused != 1:
+        problems.append(
+            "simulate with solver='qp' and redundant constraints does not follow the minimal model: "
+            + "; ".join(f"{k}: {v}" for k, v in outcomes.items() if k.endswith("qp"))
+        )
+    return _Section(f, observed, problems)
+
+
+def case(quick: bool = True) -> Case:
+    """Rank-deficient constraint Jacobians: what each solver and simulate do."""
+    found = _Findings()
+    sections = [
+        _duplicates(found),
+        _on_manifold(found, quick),
+        _off_manifold(found, quick),
+        _contradictions(found),
+        _simulations(found),
+    ]
+    f: dict[str, float] = {}
+    for section in sections:
+        f.update(section.figures)
+    f.update(wrong_answers=float(len(found.wrong_answers)), non_project_exceptions=float(len(found.non_project)))
+    problems = [p for section in sections for p in section.problems]
+    if found.wrong_answers:
+        problems.append(
+            "An acceleration (or run) different from the minimal model's: "
+            + "; ".join(w[:300] for w in found.wrong_answers[:3])
+            + ". Repro: `sc, red = gausspp.studies.stability.redundant.pendulum_with_distance()`; red.step(0, q, v) vs "
+            "sc.model.step(0, q, v, solver='direct') at the state above (pendulum_state)."
+        )
+    if found.non_project:
+        problems.append(
+            "Non-project exceptions with redundant constraints: " + "; ".join(n[:160] for n in found.non_project[:3])
+        )
+    observed = " ".join(section.observed for section in sections)
+    return Case(NAME, WHAT, EXPECTED, observed, not problems, f, tuple(problems))
