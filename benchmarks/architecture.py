@@ -106,6 +106,43 @@ def levels(graph: dict[str, set[str]]) -> dict[str, int]:
     return {m: level(comp_of[m]) for m in graph}
 
 
+def foreign_writes(root: Path) -> list[str]:
+    """Places where a module writes attributes into an object it was handed (``file:line what``).
+
+    Flags every use of ``__dict__``, every ``setattr(...)`` and ``object.__setattr__(...)`` whose target is
+    not ``self``, and every assignment to an attribute of a function's parameter other than ``self``/``cls``
+    (except an exception's ``args``, re-worded before it is raised again). Objects a function creates itself
+    may be configured freely.
+    """
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        rel = path.relative_to(root.parent).as_posix()
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute) and node.attr == "__dict__":
+                found.append(f"{rel}:{node.lineno} __dict__")
+            if isinstance(node, ast.Call):
+                fn = node.func
+                name = fn.id if isinstance(fn, ast.Name) else fn.attr if isinstance(fn, ast.Attribute) else ""
+                if name in ("setattr", "__setattr__") and node.args:
+                    target = node.args[0]
+                    if not (isinstance(target, ast.Name) and target.id == "self"):
+                        found.append(f"{rel}:{node.lineno} {name}")
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                params = {a.arg for a in (*node.args.posonlyargs, *node.args.args, *node.args.kwonlyargs)}
+                params -= {"self", "cls"}
+                for sub in ast.walk(node):
+                    targets = sub.targets if isinstance(sub, ast.Assign) else [getattr(sub, "target", None)]
+                    if not isinstance(sub, ast.Assign | ast.AugAssign | ast.AnnAssign):
+                        continue
+                    for t in targets:
+                        if t is None or not isinstance(t, ast.Attribute) or t.attr == "args":
+                            continue  # ``exc.args = ...``: an exception re-worded before it is raised again
+                        if isinstance(t.value, ast.Name) and t.value.id in params:
+                            found.append(f"{rel}:{sub.lineno} {t.value.id}.{t.attr} =")
+    return sorted(set(found))
+
+
 def longest_function(path: Path) -> tuple[int, str]:
     """(lines, name) of the longest function or method in one file."""
     best = (0, "")
@@ -134,6 +171,8 @@ def main(root: Path) -> None:
     print(f"modules over 400 lines  {sum(s > 400 for s in sizes.values())}")
     print(f"import levels           {max(depth.values())}")
     print(f"import cycles           {len(cycles)}  {cycles}")
+    writes = foreign_writes(root)
+    print(f"foreign attribute writes {len(writes)}  {writes}")
 
 
 if __name__ == "__main__":

@@ -44,7 +44,8 @@ from .step.results import StepResult
 from .studies import report, sweeps
 from .studies.sweeps import sweep
 from .verification.crosscheck import CrossCheck, acceleration_qp, crosscheck
-from .verification.integral import Verification, verify
+from .verification.integral import Verification
+from .verification.verify import verify
 
 __version__ = "0.1.0"
 

@@ -322,7 +322,7 @@ def _demo_figures(out: Path) -> None:
 def _demo_scenes() -> None:
     """Every scene: compiled RK4 by QP and by the direct step, constraint residual, verification by (23)."""
     from .simulation.simulate import simulate
-    from .verification.integral import verify
+    from .verification.verify import verify
 
     print(
         f"Every scene, compiled RK4 with the direct step and with the Gauss QP ({qp.DEFAULT}), then verified by (23):\n"
@@ -704,7 +704,7 @@ def run(args: argparse.Namespace) -> int:
 # -- verify -------------------------------------------------------------------------------------
 def verify(args: argparse.Namespace) -> int:
     """Simulate a scene, then decide by (23) whether the path is a motion of its model (or of another)."""
-    from .verification.integral import verify as check
+    from .verification.verify import verify as check
 
     params = _parse_params(args.scene, args.param)
     check_params = _parse_params(args.scene, args.check_param, "--check-param")

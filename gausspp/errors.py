@@ -75,6 +75,10 @@ class IntegrationError(GaussppError):
     """The time integrator could not continue (step size underflow, too many steps)."""
 
 
+class FrozenModelError(GaussppError, AttributeError):
+    """An attribute of a :class:`~gausspp.Model` was set: a model does not change once built."""
+
+
 class BackendUnavailableError(GaussppError, ImportError):
     """A known QP backend is not installed on this machine."""
 

@@ -525,8 +525,8 @@ def test_four_bar_initial_data_close_the_loop() -> None:
     for third_row in four_bar.THIRD_ROWS:
         scene = four_bar.build(third_row=third_row)
         assert scene.model.k == 3 and scene.model.row_names[-1] == f"closure ({third_row})"
-        out = scene.model.evaluate_data(0.0, scene.q0, scene.v0, np.zeros(0), np.zeros(2))
-        assert np.max(np.abs(out[6])) < 1e-14 and np.max(np.abs(out[7])) < 1e-14  # Φ and g
+        out = scene.model.evaluate_data(0.0, scene.q0, scene.v0, np.zeros(0))
+        assert np.max(np.abs(out.Phi)) < 1e-14 and np.max(np.abs(out.g)) < 1e-14
         assert np.linalg.matrix_rank(scene.model.step_data(0.0, scene.q0, scene.v0).J, tol=1e-9) == 2
     assert four_bar.build(redundant=False).model.k == 2
 

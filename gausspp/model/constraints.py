@@ -10,37 +10,15 @@ How the constraint is *realized* — which reaction keeps it — is its ``realiz
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
 
 from ..errors import InputError
+from .constraint_expressions import ConstraintExpressions
 from .mechanism import Mechanism
 from .realizations import Realization, as_realization
 from .symbolic import evaluate, require_affine_in
-
-
-@dataclass(frozen=True)
-class ConstraintExpressions:
-    """Symbolic pieces of one constraint on one mechanism.
-
-    Attributes
-    ----------
-    Phi : (k,) SX
-        The velocity-level constraint ``Φ(q, v, t)``.
-    J : (k, nv) SX
-        ``∂Φ/∂v``.
-    phi : (k,) SX
-        Right-hand side of ``J q̈ = φ``: ``−(∂Φ/∂q · q̇ + ∂Φ/∂t)``.
-    g : (k,) SX or None
-        The holonomic constraint ``g(q, t)``, if any.
-    """
-
-    Phi: ca.SX
-    J: ca.SX
-    phi: ca.SX
-    g: ca.SX | None
 
 
 class Constraint:
@@ -111,8 +89,12 @@ class Holonomic(Constraint):
         super().__init__(lambda q, v, t: None, name=name, realization=realization)
         self._g = _function(self, "g", g)  # ġ is affine in the velocities by construction
 
+    def value(self, q: Any, t: Any) -> ca.SX:
+        """``g(q, t)`` on casadi symbols (or numbers), checked to be a column."""
+        return evaluate(self._g, (q, t), (None, 1), f"{self._title}: g(q, t)")
+
     def expressions(self, mech: Mechanism) -> ConstraintExpressions:
-        g = evaluate(self._g, (mech.q, mech.t), (None, 1), f"{self._title}: g(q, t)")
+        g = self.value(mech.q, mech.t)
         Phi = ca.jacobian(g, mech.q) @ mech.qdot + ca.jacobian(g, mech.t)
         return _differentiate(Phi, mech, g=g)
 

@@ -32,10 +32,10 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, NonFiniteError, ShapeError, UnknownNameError
+from .constraint_expressions import ConstraintExpressions
 from .symbolic import evaluate, require_affine_in
 
 if TYPE_CHECKING:
-    from .constraints import ConstraintExpressions
     from .mechanism import Mechanism
 
 

@@ -30,6 +30,7 @@ from ..errors import (
     UnknownNameError,
 )
 from ..model.model import Model
+from ..model.workspace import workspace
 from ..step import qp
 from ..step.outcome import QP_TOLERANCE, Where, to_result
 from ..validation import array, number, positive
@@ -302,9 +303,7 @@ def _project(
     square solves are singular) the model's least-squares Newton."""
     if redundant:
         return model.nearest_on_manifold
-    if model._projection is None:
-        model._projection = projection_function(model)
-    fn = model._projection
+    fn = workspace(model).get(("projection",), lambda: projection_function(model))
 
     def project(t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q1, v1 = fn(t, q, v, lam)
@@ -314,8 +313,8 @@ def _project(
 
 
 def _residuals(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    data = model.evaluate_data(t, q, v, lam, np.zeros(2))
-    return data[7].ravel().copy(), data[6].ravel().copy()
+    data = model.evaluate_data(t, q, v, lam)
+    return data.g, data.Phi
 
 
 def _project_initial(

@@ -29,7 +29,7 @@ from .qp import QPBackend
 from .qp.casadi_conic import stdout_silenced
 
 
-class _Bound:
+class Bound:
     """A casadi Function with numpy arrays bound to every input and output."""
 
     def __init__(self, fn: ca.Function) -> None:
@@ -51,7 +51,7 @@ class _Bound:
         return self.outputs[i]
 
 
-def _load(targets: Sequence[np.ndarray], values: Sequence[Any]) -> None:
+def load_inputs(targets: Sequence[np.ndarray], values: Sequence[Any]) -> None:
     for target, value in zip(targets, values, strict=True):
         target[:] = np.ravel(value, order="F")
 
@@ -62,7 +62,7 @@ class CompiledKernel:
     compiled = True
 
     def __init__(self, fn: ca.Function, qp_parts: tuple[ca.Function, ca.Function, QPBackend] | None = None) -> None:
-        self._f = _Bound(fn)
+        self._f = Bound(fn)
         self.inputs = self._f.args
         #: for a QP posed in the graph: (build, finish, backend), to compose larger graphs
         self.qp_parts = qp_parts
@@ -81,7 +81,7 @@ class CompiledKernel:
         return dict(zip(OUTPUTS, self._f.outputs, strict=True))
 
     def __call__(self, *values: Any) -> dict[str, np.ndarray]:
-        _load(self.inputs, values)
+        load_inputs(self.inputs, values)
         self._f.eval()
         return self.result()
 
@@ -92,8 +92,8 @@ class PythonQPKernel:
     compiled = False
 
     def __init__(self, build: ca.Function, finish: ca.Function, backend: QPBackend) -> None:
-        self._build = _Bound(build)
-        self._finish = _Bound(finish)
+        self._build = Bound(build)
+        self._finish = Bound(finish)
         self.backend = backend
         self.inputs = self._build.args
 
@@ -106,7 +106,7 @@ class PythonQPKernel:
             u, y = self.backend.solve(H, S, rhs)
         else:  # a singular or non-finite step: no QP to pose; the checks diagnose the NaN that follows
             u, y = np.full(H.shape[0], np.nan), np.full(S.shape[0], np.nan)
-        _load(self._finish.args, [*self.inputs, u, y])
+        load_inputs(self._finish.args, [*self.inputs, u, y])
         self._finish.eval()
 
     def result(self) -> dict[str, np.ndarray]:
@@ -114,7 +114,7 @@ class PythonQPKernel:
         return dict(zip(OUTPUTS, self._finish.outputs, strict=True))
 
     def __call__(self, *values: Any) -> dict[str, np.ndarray]:
-        _load(self.inputs, values)
+        load_inputs(self.inputs, values)
         self.evaluate()
         return self.result()
 
@@ -122,7 +122,7 @@ class PythonQPKernel:
 Kernel = CompiledKernel | PythonQPKernel
 
 
-def _dense(exprs: list[ca.SX]) -> list[ca.SX]:
+def dense_outputs(exprs: list[ca.SX]) -> list[ca.SX]:
     """Outputs with every entry stored: buffers are sized by stored entries, and a structural
     zero (say, a residual casadi proves to vanish) must still come out as a number."""
     return ca.cse([ca.densify(e) for e in exprs])  # and each common subexpression computed once
@@ -149,7 +149,7 @@ def build_kernel(
     red = reduce(p)
     if solver == "direct":
         return CompiledKernel(
-            ca.Function(f"{name}_direct", inputs, _dense(outputs(p, red, direct_reaction(red), None, refine)))
+            ca.Function(f"{name}_direct", inputs, dense_outputs(outputs(p, red, direct_reaction(red), None, refine)))
         )
     assert backend is not None
     k, m = red.S_hat.shape
@@ -159,8 +159,8 @@ def build_kernel(
     norms = ca.sqrt(ca.sum2(red.S_hat * red.S_hat))
     rows = ca.if_else(norms > 0, 1 / norms, 1)
     scaled = ca.diag(rows) @ red.S_hat
-    build = ca.Function(f"{name}_qp_data", inputs, _dense([ca.SX.eye(m), scaled, rows * red.rhs_hat]))
-    finish = ca.Function(f"{name}_qp_finish", [*inputs, z, y], _dense(outputs(p, red, z, rows * y, refine)))
+    build = ca.Function(f"{name}_qp_data", inputs, dense_outputs([ca.SX.eye(m), scaled, rows * red.rhs_hat]))
+    finish = ca.Function(f"{name}_qp_finish", [*inputs, z, y], dense_outputs(outputs(p, red, z, rows * y, refine)))
     if not backend.compiled:
         return PythonQPKernel(build, finish, backend)
     mx_in = [ca.MX.sym(f"in{i}", s.sparsity()) for i, s in enumerate(inputs)]

@@ -7,7 +7,7 @@ which piece is not finite, which constraint is not realizable — runs only on f
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, NamedTuple
 
@@ -41,7 +41,7 @@ class Where:
 
     t: float
     solver: str
-    groups: list[Group]
+    groups: Sequence[Group]
     data: Callable[[], StepProblem]
 
 
@@ -53,7 +53,7 @@ def _where(t: float) -> str:
     return f"at t={t:.6g}"
 
 
-def _check_data(data: StepProblem, t: float, groups: list[Group]) -> None:
+def _check_data(data: StepProblem, t: float, groups: Sequence[Group]) -> None:
     for field in ("A", "f", "r0"):
         if not np.all(np.isfinite(getattr(data, field))):
             what = {"A": "the mass matrix A", "f": "the forces F − h", "r0": "the known reaction r₀ (from λ)"}[field]
@@ -84,7 +84,7 @@ def _not_positive_definite(data: StepProblem, t: float) -> NotPositiveDefiniteEr
 
 
 def _unrealizable(
-    data: StepProblem, t: float, margin: float, groups: list[Group], margin_error: float
+    data: StepProblem, t: float, margin: float, groups: Sequence[Group], margin_error: float
 ) -> RealizabilityError:
     solo = [(_smallest(cosines(data.A, data.J[g.rows], data.D[:, g.cols])), g) for g in groups]
     worst_margin, worst = min(solo, key=lambda s: s[0])
@@ -168,7 +168,9 @@ def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, m
     )
 
 
-def warn_small_margin(margin: float, t: float, groups: list[Group], margin_warn: float, stacklevel: int = 4) -> None:
+def warn_small_margin(
+    margin: float, t: float, groups: Sequence[Group], margin_warn: float, stacklevel: int = 4
+) -> None:
     """Warn (:class:`RealizabilityWarning`) when ``margin < margin_warn``: the reaction is large and sensitive."""
     if margin < margin_warn:
         names = ", ".join(repr(g.name) for g in groups)

@@ -24,9 +24,8 @@ weight ``w``) and ``λ = −ν/h`` at interval midpoints.
 
 from __future__ import annotations
 
-import functools
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
@@ -36,6 +35,7 @@ from scipy.interpolate import make_interp_spline
 
 from ..errors import InitialDataError, InputError, NonFiniteError, QPSolveError, ShapeError, UnknownNameError
 from ..model.model import Model
+from ..model.workspace import workspace
 from ..step.general import RANK_TOL
 from ..validation import array, positive, short
 
@@ -122,8 +122,12 @@ class Discretized:
 
 
 # -- model side: the data of (23) along a path --------------------------------------------------
-@functools.lru_cache(maxsize=32)
-def _data_function(model: Model) -> ca.Function:
+def data_function(model: Model) -> ca.Function:
+    """``(t, q, v, a) -> (R, A, E1, E0, Φ, g, f)`` along a path (kept in the model's workspace)."""
+    return workspace(model).get(("integral-data",), lambda: _build_data_function(model))
+
+
+def _build_data_function(model: Model) -> ca.Function:
     mech = model.mechanism
     a = ca.SX.sym("a", mech.nv)
     E1s, E0s, pointwise = [], [], []
@@ -150,7 +154,7 @@ def _window(window: Any) -> tuple[float, float]:
     return float(ends[0]), float(ends[1])
 
 
-def _path(trajectory: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
+def path_samples(trajectory: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
     get = trajectory.get if isinstance(trajectory, Mapping) else lambda k, d=None: getattr(trajectory, k, d)
     missing = [k for k in ("t", "q", "v") if get(k, None) is None]
     if missing:
@@ -176,7 +180,7 @@ def check_samples(t: np.ndarray, q: np.ndarray, v: np.ndarray, *, monotone: bool
         raise InputError(f"trajectory: t must be {order} with at least 2 samples")
 
 
-def _check_model(model: Any) -> None:
+def check_model(model: Any) -> None:
     if not isinstance(model, Model):
         raise InputError(f"model must be a gp.Model, got {short(model)}")
 
@@ -192,10 +196,10 @@ def discretize(
     constraint_tol: float = 1e-6,
 ) -> Discretized:
     """Evaluate ``R``, the metric and (20) on the nodes of a path (checked)."""
-    _check_model(model)
+    check_model(model)
     if nodes is not None:
         nodes = positive("nodes", nodes, integer=True, hint=" (uniform nodes in the window, at least 5)")
-    t, q, v, a = _path(trajectory)
+    t, q, v, a = path_samples(trajectory)
     N = t.size
     if q.shape != (N, model.nq) or v.shape != (N, model.nv):
         raise ShapeError(
@@ -234,7 +238,7 @@ def discretize(
         raise InputError(
             f"too few nodes in the window: {tn.size}; the discretization needs at least 5 (pass nodes=...)"
         )
-    fn = _data_function(model)
+    fn = data_function(model)
     out = fn.map(tn.size)(tn[None, :], qn.T, vn.T, an.T)
     R, A, E1, E0, Phi, g, f = (np.array(x) for x in out)
     n, k, N1 = model.nv, model.k, tn.size
@@ -412,84 +416,6 @@ def solve_closed_form(d: Discretized) -> tuple[float, np.ndarray, np.ndarray]:
         lam[i] = mu
         total -= w[i] * perp @ np.linalg.solve(G, perp)
     return total / (d.t[-1] - d.t[0]), eta, lam
-
-
-def verify(
-    model: Model,
-    trajectory: Any,
-    *,
-    window: tuple[float, float] | None = None,
-    nodes: int | None = None,
-    metric: str | np.ndarray = "A",
-    method: str = "qp",
-    acceleration: str = "path",
-    constraint_tol: float = 1e-6,
-) -> Verification:
-    """Decide by inequality (23) whether ``trajectory`` is a motion of ``model``.
-
-    Parameters
-    ----------
-    model : Model
-        The model (with its realizations) to test the path against.
-    trajectory : Trajectory or mapping
-        Anything with ``t (N,)``, ``q (N, nq)``, ``v (N, nv)`` and optionally ``a (N, nv)``: a
-        result of :func:`simulate` or data from elsewhere.
-    window : (t1, t2), optional
-        Part of the data to use (default: all).
-    nodes : int, optional
-        Resample the window at this many uniform nodes (quintic splines); default: the samples.
-    metric : "A", "identity" or an SPD (nv, nv) array
-        The matrix of (23); any positive definite one gives the same verdict.
-    method : {"qp", "closed-form"}
-        The sparse QP (any realization), or the pointwise closed form (``N = 0`` only).
-    acceleration : {"path", "recorded"}
-        ``ẍ`` from the path's velocities (quintic spline; the honest check) or the trajectory's
-        recorded accelerations (measured data).
-
-    An over-actuated :class:`~gausspp.Force` enters with the relations of its least-compulsion
-    reaction, ``S H⁻¹ M δx = 0``, so a path with another allocation is not a motion.
-
-    A model with unilateral contacts or bounded actuators is verified in smooth pieces, each by
-    the law that held on it (:mod:`gausspp.verification.pieces`): between impacts and lift-offs with the closed
-    contacts as ideal constraints (and the jumps against the impact law), on saturated intervals
-    with the actuators' force at its bound as a known force. A failed run (``success`` false)
-    is verified on what was computed, and ``message`` says so. Both need the samples
-    themselves (``nodes`` must be ``None``). The result's ``pieces``, ``skipped`` and ``message``
-    say what was checked; a trajectory of which no piece can be checked raises
-    :class:`~gausspp.InputError` with the reasons.
-    """
-    _check_model(model)
-    if method not in ("qp", "closed-form"):
-        raise UnknownNameError(f"method={method!r} is unknown; use 'qp' or 'closed-form'")
-    failed = getattr(trajectory, "status", "success") != "success"
-    if model.contacts or model.bounded or failed:
-        if nodes is not None:
-            raise InputError(
-                f"nodes={nodes} resamples one smooth path; this trajectory (contacts, bounded actuators or a failed "
-                "run) is verified piece by piece at its own samples: leave nodes=None"
-            )
-        from .pieces import verify_pieces
-
-        return verify_pieces(
-            model,
-            trajectory,
-            window=window,
-            metric=metric,
-            method=method,
-            acceleration=acceleration,
-            constraint_tol=constraint_tol,
-        )
-    d = discretize(
-        model,
-        trajectory,
-        window=window,
-        nodes=nodes,
-        metric=metric,
-        acceleration=acceleration,
-        constraint_tol=constraint_tol,
-    )
-    ver = judge(d, method)
-    return replace(ver, message=f"[{d.t[0]:.6g}, {d.t[-1]:.6g}] one smooth path: {verdict(ver)}")
 
 
 def verdict(ver: Verification) -> str:

@@ -39,6 +39,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ShapeError
+from ..model.derived import gaps as contact_gaps
+from ..model.derived import phase_model, sub_model
 from ..model.model import Model
 from . import integral
 from .integral import Verification
@@ -73,7 +75,7 @@ class Piece:
 
 @dataclass(frozen=True)
 class Path:
-    """The samples of a trajectory (checked by :func:`gausspp.verification.integral._path`) and what it recorded."""
+    """The samples of a trajectory (checked by :func:`~gausspp.verification.integral.path_samples`), its records."""
 
     t: np.ndarray
     q: np.ndarray
@@ -87,7 +89,7 @@ class Path:
 
 def read(model: Model, trajectory: Any) -> Path:
     """The path's arrays, checked for shape and finiteness as :func:`integral.discretize` does."""
-    t, q, v, a = integral._path(trajectory)
+    t, q, v, a = integral.path_samples(trajectory)
     if q.shape != (t.size, model.nq) or v.shape != (t.size, model.nv):
         raise ShapeError(
             f"trajectory: q and v must be ({t.size}, {model.nq}) and ({t.size}, {model.nv}), got {q.shape}, {v.shape}"
@@ -136,9 +138,9 @@ def spans(n: int, where: list[tuple[int, int]]) -> list[tuple[int, int]]:
 # -- the law on each piece --------------------------------------------------------------------------
 def contact_pieces(model: Model, path: Path, ranges: list[tuple[int, int]], tol: float) -> list[Piece]:
     """Each range with the contacts that stay closed on it as ideal bilateral constraints."""
-    from ..simulation.contacts import _gaps, _phase_model
-
-    gaps = np.array([np.concatenate(_gaps(model, t, q, v)) for t, q, v in zip(path.t, path.q, path.v, strict=True)])
+    gaps = np.array(
+        [np.concatenate(contact_gaps(model, t, q, v)) for t, q, v in zip(path.t, path.q, path.v, strict=True)]
+    )
     nc = len(model.contact_row_names)
     g, gdot = gaps[:, :nc], gaps[:, nc:]
     pieces = []
@@ -157,7 +159,7 @@ def contact_pieces(model: Model, path: Path, ranges: list[tuple[int, int]], tol:
             Piece(
                 start,
                 stop,
-                _phase_model(model, active),
+                phase_model(model, active),
                 label,
                 columns=(*range(model.k), *(model.k + i for i in active)),
                 contacts=tuple(model.k + i for i in active),
@@ -200,7 +202,7 @@ _PARTIAL = (
 
 def _off_constraint(model: Model, path: Path, tol: float) -> np.ndarray:
     """Per sample: is the path off the model's constraint (``|Φ|`` or ``|g|`` above ``tol``)?"""
-    fn = integral._data_function(model)
+    fn = integral.data_function(model)
     out = fn.map(path.t.size)(path.t[None, :], path.q.T, path.v.T, np.zeros((model.nv, path.t.size)))
     Phi, g = (np.abs(np.array(x)).reshape(model.k, path.t.size) for x in out[4:6])
     worst: np.ndarray = np.maximum(Phi.max(axis=0, initial=0.0), g.max(axis=0, initial=0.0))
@@ -238,22 +240,7 @@ def _saturated(model: Model, path: Path, start: int, stop: int, bounded: list[in
     )
     free = [i for i in range(len(model.constraints)) if i not in bounded]
     rows = tuple(int(r) for i in free for r in range(model.k)[model.groups[i].rows])
-    return Piece(start, stop, _without(model, tuple(free)), "saturated: actuators at their bounds", rows, known)
-
-
-def _without(model: Model, keep: tuple[int, ...]) -> Model:
-    """The model with only the constraints ``keep`` (cached on the model)."""
-    cache: dict[tuple[int, ...], Model] = model.__dict__.setdefault("_verify_models", {})
-    if keep not in cache:
-        cache[keep] = Model(
-            model.mechanism,
-            [model.constraints[i] for i in keep],
-            margin_warn=model.margin_warn,
-            margin_error=model.margin_error,
-            refine=model.refine,
-            _allow_free=True,
-        )
-    return cache[keep]
+    return Piece(start, stop, sub_model(model, tuple(free)), "saturated: actuators at their bounds", rows, known)
 
 
 # -- verifying ---------------------------------------------------------------------------------------

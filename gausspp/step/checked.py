@@ -1,0 +1,159 @@
+"""The checked step: the compiled kernel of the chosen solver, its outcome judged, and the fallbacks.
+
+:func:`checked_step` is what :meth:`gausspp.Model.step` does. A compiled step is one casadi call
+(:func:`kernel_for`, kept in the model's workspace); its outputs are judged by
+:func:`~gausspp.step.outcome.to_result` (realizability margin, QP residuals). The general Gauss QP
+(:mod:`gausspp.step.general_step`) answers instead when the model has inequalities (contacts,
+bounded actuators), and when the compiled QP meets rows that are redundant on the constraint manifold.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import GaussppError, InputError, QPSolveError, RealizabilityError, UnknownNameError
+from ..model.workspace import workspace
+from . import qp
+from .data import NO_STAB, evaluate
+from .general_step import solve_at
+from .kernel import Kernel, build_kernel
+from .outcome import Where, evaluation_failed, to_result, warn_small_margin
+from .problem import StepProblem
+from .protocol import StepModel
+from .results import StepResult
+
+SOLVERS = ("qp", "direct")
+DIRECT_NEEDS_INDEPENDENT_ROWS = (
+    " (solver='direct' needs independent rows; solver='qp' returns the unique acceleration "
+    "and the least-norm multiplier when the rows are redundant)"
+)
+
+
+def backend_name(backend: str | qp.QPBackend | None) -> str | None:
+    """The registry name of ``backend`` (a name, a backend object, or ``None`` for the default)."""
+    return backend.name if isinstance(backend, qp.QPBackend) else backend
+
+
+def kernel_for(model: StepModel, solver: str, backend: str | qp.QPBackend | None, refine: bool) -> Kernel:
+    """The compiled step of ``model`` for ``solver`` (and QP ``backend``), built on first use and kept."""
+    if solver not in SOLVERS:
+        raise UnknownNameError(f"solver={solver!r} is unknown; use one of {list(SOLVERS)}")
+    if model.contacts or model.bounded:
+        raise InputError(
+            "this model has unilateral contacts or bounded actuators: its step is the general Gauss QP, "
+            "solved from Python (model.step(..., solver='qp')), not a compiled kernel"
+        )
+    if solver == "direct" and backend is not None:
+        raise InputError(f"backend={backend!r} applies to solver='qp' only")
+    chosen = qp.get(backend) if solver == "qp" else None
+    key = ("kernel", solver, chosen.name if chosen else None, refine)
+    ws = workspace(model)
+    kernel = ws.get(key, lambda: build_kernel("step", model.inputs, model.expressions, solver, chosen, refine))
+    if chosen is not None and getattr(kernel, "backend", chosen) is not chosen:  # a backend object given anew
+        kernel = ws.put(key, build_kernel("step", model.inputs, model.expressions, solver, chosen, refine))
+    return kernel
+
+
+def step_problem(model: StepModel, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> StepProblem:
+    """The step's ``A, f = F − h, r₀, J, φ, D, Φ`` as numbers (no checks on their values)."""
+    d = evaluate(model, t, q, v, lam)
+    return StepProblem(A=d.A, f=d.f, r0=d.r0, J=d.J, phi=d.phi, D=d.D, Phi=d.Phi)
+
+
+def _general(model: StepModel, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, backend: object):
+    """The general QP's result and solution (for the fallbacks below)."""
+    result, solution, _ = solve_at(model, t, q, v, lam, backend_name(backend))  # type: ignore[arg-type]
+    return result, solution
+
+
+def _redundant_step(
+    model: StepModel, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, exc: Exception, backend: object
+) -> StepResult:
+    """The compiled QP refused a singular step: if the rows are merely redundant, the general QP answers."""
+    try:
+        result, solution = _general(model, t, q, v, lam, backend)
+    except (RealizabilityError, QPSolveError) as general:  # the compiled step's message names the cause
+        exc.args = (f"{exc} [the general QP: {general}]",)
+        raise exc from None
+    if solution.redundant_rows == 0:
+        raise exc
+    return result
+
+
+def _small_margin(
+    model: StepModel,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    lam: np.ndarray,
+    result: StepResult,
+    solver: str,
+    backend: object,
+) -> StepResult:
+    """A small margin: nearly dependent rows.
+
+    If they are dependent on the constraint manifold (and independent here only by round-off or drift),
+    solving them exactly would amplify the drift by 1/margin — the general QP keeps the independent rows
+    instead (:mod:`gausspp.step.redundancy`); ``solver='direct'`` refuses.
+    """
+    if model.k > 1:
+        try:
+            general, solution = _general(model, t, q, v, lam, backend)
+        except GaussppError:
+            general, solution = None, None
+        if general is not None and solution is not None and solution.redundant_rows > 0:
+            if solver == "direct":
+                raise RealizabilityError(
+                    f"the constraint rows of {', '.join(map(repr, model.names))} are redundant on the constraint "
+                    f"manifold at t={t:.6g} (margin here {result.margin:.3g}, by the state's distance from the "
+                    f"manifold){DIRECT_NEEDS_INDEPENDENT_ROWS}",
+                    t=t,
+                    constraint=", ".join(model.names),
+                    margin=result.margin,
+                )
+            return general
+    warn_small_margin(result.margin, t, model.groups, model.margin_warn, stacklevel=6)
+    return result
+
+
+def checked_step(
+    model: StepModel,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    lam: np.ndarray,
+    solver: str,
+    backend: str | qp.QPBackend | None,
+    refine: bool,
+) -> StepResult:
+    """The step on checked inputs (see :meth:`gausspp.Model.step` for the parameters and errors)."""
+    if model.contacts or model.bounded:
+        if solver != "qp":
+            raise InputError(
+                f"solver={solver!r}: a model with unilateral contacts or bounded actuators has no closed-form "
+                "step (inequalities); use solver='qp'"
+            )
+        return _general(model, t, q, v, lam, backend)[0]
+    kernel = kernel_for(model, solver, backend, refine)
+    name = "direct" if solver == "direct" else qp.get(backend).name
+    where = Where(t, name, model.groups, lambda: step_problem(model, t, q, v, lam))
+    try:
+        out = kernel(t, q, v, lam, NO_STAB)
+    except RuntimeError as exc:  # casadi refused to evaluate (e.g. a QP plugin given NaN data)
+        raise evaluation_failed(exc, where, margin_error=model.margin_error) from None
+    except QPSolveError as exc:  # a nearly singular step the backend could not solve: redundant rows?
+        if solver == "direct" or model.k < 2:
+            raise
+        return _redundant_step(model, t, q, v, lam, exc, backend)
+    try:
+        result = to_result(out, where, margin_warn=0.0, margin_error=model.margin_error)
+    except (RealizabilityError, QPSolveError) as exc:
+        if isinstance(exc, QPSolveError) and (solver == "direct" or model.k < 2):
+            raise
+        if solver == "direct":
+            exc.args = (f"{exc}{DIRECT_NEEDS_INDEPENDENT_ROWS}",)
+            raise
+        return _redundant_step(model, t, q, v, lam, exc, backend)
+    if result.margin >= model.margin_warn:
+        return result
+    return _small_margin(model, t, q, v, lam, result, solver, backend)

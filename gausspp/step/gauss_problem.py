@@ -1,0 +1,56 @@
+"""The model's step at one state as one :class:`~gausspp.step.general.GaussProblem`.
+
+The bilateral rows enter as equalities (or, for bounded servos, as rows to *track* with the
+reaction inside its bounds); the closed unilateral contacts as ``J_c q̈ ≥ φ_c`` with a force
+``λ_c ≥ 0`` along ``J_cᵀ`` (docs/theory.md §6).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .general import GaussProblem
+from .protocol import StepModel
+
+
+def closed_rows(model: StepModel, gc: np.ndarray, closed: Any) -> np.ndarray:
+    """Contact rows taken as closed: those given, else those within ``contact_tol`` of zero."""
+    return np.flatnonzero(gc <= model.contact_tol) if closed is None else np.asarray(closed, dtype=int)
+
+
+def gauss_problem(
+    model: StepModel,
+    t: float,
+    A: np.ndarray,
+    a0: np.ndarray,
+    J: np.ndarray,
+    phi: np.ndarray,
+    D: np.ndarray,
+    Jc: np.ndarray,
+    phi_c: np.ndarray,
+    closed: np.ndarray,
+) -> GaussProblem:
+    """The bilateral rows (bounded ones tracked) and the closed contacts (``≥``, force ``≥ 0``) as one QP."""
+    m, nc, nv = model.m, closed.size, model.nv
+    Jcc = Jc[closed].reshape(nc, nv)
+    lower, upper = np.full(m + nc, -np.inf), np.full(m + nc, np.inf)
+    lower[m:] = 0.0
+    kind = ["eq"] * model.k + ["ge"] * nc
+    for grp, bounds in zip(model.groups, model.group_bounds, strict=True):
+        if bounds is not None:
+            lower[grp.cols], upper[grp.cols] = bounds
+            kind[grp.rows] = ["track"] * (grp.rows.stop - grp.rows.start)
+    return GaussProblem(
+        A=A,
+        a0=a0,
+        D=np.hstack([D.reshape(nv, m), Jcc.T]),
+        J=np.vstack([J.reshape(model.k, nv), Jcc]),
+        phi=np.concatenate([phi.ravel(), phi_c]),
+        kind=kind,
+        lower=lower,
+        upper=upper,
+        rows=[*model.row_names, *(model.contact_row_names[i] for i in closed)],
+        t=t,
+    )
