@@ -14,7 +14,7 @@ import numpy as np
 
 from ..errors import InputError, NonFiniteError
 from .data import NO_STAB, StepData, evaluate
-from .gauss_problem import closed_rows, gauss_problem
+from .model_qp import closed_rows, gauss_problem
 from .general import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, solve_general
 from .manifold import on_manifold, reference_problem
 from .protocol import StepModel

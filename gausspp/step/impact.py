@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 from .data import evaluate
-from .gauss_problem import closed_rows, gauss_problem
+from .model_qp import closed_rows, gauss_problem
 from .general import solve_general
 from .protocol import StepModel
 from .results import ImpactResult

@@ -16,7 +16,7 @@ import numpy as np
 from ..errors import RealizabilityError
 from ..model.workspace import workspace
 from .data import evaluate
-from .gauss_problem import gauss_problem
+from .model_qp import gauss_problem
 from .general import GaussProblem
 from .protocol import StepModel
 from .redundancy import CLEARLY_INDEPENDENT, independent_rows
