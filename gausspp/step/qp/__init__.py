@@ -22,7 +22,8 @@ Defaults, one per form, declared here (:func:`default`):
 * the general QP: the first installed of :data:`GENERAL_DEFAULTS`, ``qpsolvers:daqp`` then
   ``qpsolvers:osqp`` — on ``benchmarks/general_qp.py`` daqp agrees with the exact answers to round-off
   and is the fastest of the exact ones called from Python; ``casadi:qrqp`` solves the same stages
-  (agreement ≤ 1e-12) but pays casadi's per-call argument handling on every stage.
+  (agreement ≤ 1e-12) but pays casadi's per-call argument handling on every stage;
+* the cross-check's independent reference: the first installed of :data:`REFERENCE_DEFAULTS`.
 """
 
 from __future__ import annotations
@@ -39,12 +40,23 @@ from .qpsolvers_route import QpsolversBackend
 DEFAULT = "casadi:qrqp"
 #: The general QP's default: the first of these installed here.
 GENERAL_DEFAULTS = ("qpsolvers:daqp", "qpsolvers:osqp")
+#: The cross-check's reference (:mod:`gausspp.verification.crosscheck`): exact dense active-set codes first,
+#: OSQP last; none of them the compiled step's default, so that the reference shares no solver with it.
+REFERENCE_DEFAULTS = ("qpsolvers:daqp", "qpsolvers:quadprog", "qpsolvers:osqp")
+#: Each form's default, in order of preference.
+DEFAULTS: dict[str, tuple[str, ...]] = {
+    "step": (DEFAULT,),
+    "general": GENERAL_DEFAULTS,
+    "reference": REFERENCE_DEFAULTS,
+}
 
 __all__ = [
     "ALL_FORMS",
     "DEFAULT",
+    "DEFAULTS",
     "FORMS",
     "GENERAL_DEFAULTS",
+    "REFERENCE_DEFAULTS",
     "QP",
     "CasadiConic",
     "QPAnswer",
@@ -116,16 +128,19 @@ def get(name: str | QPBackend | None = None) -> QPBackend:
 
 
 def default(form: str = "step") -> str:
-    """The default backend's name for ``form``: ``"step"`` (the compiled step) or ``"general"``."""
+    """The default backend's name for ``form`` (a key of :data:`DEFAULTS`): the first of its list installed here.
+
+    The compiled step's :data:`DEFAULT` is returned as declared (an uninstalled one is reported when used).
+    """
+    if form not in DEFAULTS:
+        raise UnknownNameError(f"QP form {form!r} is unknown; use one of {sorted(DEFAULTS)}")
     if form == "step":
         return DEFAULT
-    if form != "general":
-        raise UnknownNameError(f"QP form {form!r} is unknown; use 'step' or 'general'")
     installed = set(names())
-    for candidate in GENERAL_DEFAULTS:
+    for candidate in DEFAULTS[form]:
         if candidate in installed:
             return candidate
-    raise BackendUnavailableError(f"none of {list(GENERAL_DEFAULTS)} is installed: `pip install osqp`")
+    raise BackendUnavailableError(f"none of {list(DEFAULTS[form])} is installed: `pip install osqp`")
 
 
 def require(backend: QPBackend, features: frozenset[str] | set[str]) -> QPBackend:
