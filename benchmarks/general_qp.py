@@ -1,4 +1,4 @@
-"""Time per step of the general Gauss QP (daqp vs OSQP) on the issue-7 scenes: ``python benchmarks/general_qp.py``.
+"""The general Gauss QP per step (daqp, OSQP, casadi:qrqp) on the issue-7 scenes: ``python benchmarks/general_qp.py``.
 
 Cases (one state each):
 
@@ -44,7 +44,9 @@ from gausspp.scenes import two_actuator_servo as tas
 from gausspp.step.general import GaussProblem, solve_general
 from gausspp.step.results import StepResult
 
-GENERAL = ("daqp", "osqp")
+#: Backends of the general QP compared, by registry name ("daqp", "osqp": qpsolvers' solvers; casadi:qrqp: the
+#: compiled step's default, through casadi's conic with bounds and inequalities).
+GENERAL = ("daqp", "osqp", "casadi:qrqp")
 
 
 @dataclass

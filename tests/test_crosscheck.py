@@ -117,8 +117,27 @@ def test_crosscheck_refuses_bad_input() -> None:
         gp.acceleration_qp(np.diag([1.0, -1.0]), np.zeros(2), np.eye(1, 2), np.zeros(1), np.eye(2, 1))
     with pytest.raises(gp.InputError, match="shapes"):
         gp.acceleration_qp(np.eye(2), np.zeros(3), np.eye(1, 2), np.zeros(1), np.eye(2, 1))
-    with pytest.raises(gp.UnknownNameError, match="not installed"):
+    with pytest.raises(gp.UnknownNameError, match=r"'nosuchsolver' is unknown; valid names here: \["):
         gp.acceleration_qp(np.eye(2), np.zeros(2), np.eye(1, 2), np.zeros(1), np.eye(2, 1), backend="nosuchsolver")
+
+
+def test_the_reference_backend_is_chosen_by_registry_name() -> None:
+    """The reference's backend is a registry name (default: the first installed of REFERENCE_DEFAULTS), and any
+    backend of the registry that solves the general form gives the same reference."""
+    args = (
+        np.diag([1.0, 2.0]),
+        np.array([0.5, -1.0]),
+        np.array([[1.0, 1.0]]),
+        np.array([0.3]),
+        np.array([[1.0], [0.0]]),
+    )
+    default = gp.acceleration_qp(*args)
+    chosen = gp.qp.default("reference")
+    assert chosen in gp.qp.REFERENCE_DEFAULTS and default.backend == gp.qp.short_name(gp.qp.get(chosen))
+    for name in ("casadi:qrqp", "qpsolvers:osqp"):
+        other = gp.acceleration_qp(*args, backend=name)
+        assert other.backend == gp.qp.short_name(gp.qp.get(name))
+        assert np.allclose(other.a, default.a, rtol=0, atol=1e-10) and other.dual <= 1e-9 and other.primal <= 1e-9
 
 
 def test_crosscheck_names_non_finite_data_and_an_unrealizable_state() -> None:

@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 import gausspp as gp
+from gausspp.errors import BackendUnavailableError
 from gausspp.step.general import GaussProblem, check_backend, default_backend, solve_general
 
-BACKENDS = ["daqp", "osqp"]
+BACKENDS = ["daqp", "osqp", "casadi:qrqp"]
 
 
 def _problem(**changes: object) -> GaussProblem:
@@ -84,11 +85,15 @@ def test_contacts_that_cannot_all_hold_are_a_clear_qp_error(backend: str) -> Non
 
 
 def test_backend_names() -> None:
+    """A name means one backend on every path (the registry's): no swap, a bare name by the registry's rule."""
     assert check_backend(None) == default_backend() == "daqp"
-    assert check_backend("qpsolvers:osqp") == "osqp" and check_backend("casadi:osqp") == "osqp"
-    assert check_backend("casadi:qrqp") == default_backend()  # no qpsolvers counterpart: the default
-    with pytest.raises(gp.UnknownNameError, match="not a qpsolvers solver installed here"):
-        check_backend("gurobi")
+    assert check_backend("qpsolvers:osqp") == "osqp" and check_backend("casadi:osqp") == "casadi:osqp"
+    # the compiled default is not swapped for another solver; its short name is the bare one (qpsolvers has no qrqp)
+    assert check_backend("casadi:qrqp") == check_backend("qrqp") == "qrqp"
+    with pytest.raises(
+        gp.UnknownNameError, match=r"QP backend 'gurobix' is unknown; valid names here: \[.*casadi:qrqp"
+    ):
+        check_backend("gurobix")
 
 
 def _point() -> gp.Lagrangian:
@@ -172,3 +177,118 @@ def test_verify_tells_the_least_compulsion_allocation_from_another_one() -> None
     assert gp.verify(free.model, own).is_motion
     check = gp.verify(free.model, other)
     assert not check.is_motion and check.relative_gap > 5 * check.tolerance
+
+
+# -- one registry: casadi:qrqp on inequalities, unknown / uninstalled / unable backends -----------------------------
+
+
+def _scene_state(name: str, **params: object) -> tuple[gp.Model, float, np.ndarray, np.ndarray]:
+    scene = gp.scenes.get(name, **params)
+    return scene.model, 0.0, np.asarray(scene.q0, float), np.asarray(scene.v0, float)
+
+
+@pytest.mark.parametrize(
+    "name, params",
+    [("saturated-crane", {}), ("two-actuator-servo", {"f_max": 5.0}), ("block-on-floor", {"drop": 0.0})],
+)
+def test_casadi_qrqp_solves_the_general_step_as_daqp_does(name: str, params: dict[str, object]) -> None:
+    """``backend="casadi:qrqp"`` on a model with bounds or contacts: casadi's conic with lba/uba/lbx/ubx, through
+    the same feasibility and dual-residual checks; the answer is daqp's (the backend really is qrqp: no swap)."""
+    model, t, q, v = _scene_state(name, **params)
+    ours = model.step(t, q, v, backend="casadi:qrqp")
+    reference = model.step(t, q, v, backend="qpsolvers:daqp")
+    assert ours.solver == "gauss-qp:qrqp" and reference.solver == "gauss-qp:daqp"
+    scale = 1.0 + np.max(np.abs(reference.a))
+    assert np.max(np.abs(ours.a - reference.a)) <= 1e-9 * scale
+    for force in ("u", "contact_force"):
+        mine, theirs = getattr(ours, force), getattr(reference, force)
+        assert np.max(np.abs(mine - theirs), initial=0.0) <= 1e-9 * (1.0 + np.max(np.abs(theirs), initial=0.0))
+
+
+def test_casadi_qrqp_on_a_saturated_step() -> None:
+    """The bounded servo of this module past its bound: qrqp tracks, saturates and agrees with daqp."""
+    model = _servo(bounds=(-9.5, 9.5))
+    t = 3 * np.pi / 2  # needed force 9.81 + 1 > 9.5
+    q, v = [0.0, np.sin(t)], [0.0, np.cos(t)]
+    ours, (ref, _) = model.step(t, q, v, backend="casadi:qrqp"), model.general_step(t, q, v, backend="daqp")
+    assert ours.saturated[0] and ours.u[0] == 9.5
+    assert ours.tracking_error == pytest.approx(ref.tracking_error, rel=1e-9)
+
+
+def test_contacts_with_casadi_qrqp_in_the_general_problem() -> None:
+    """A point on a floor pushed down (contact row ``ge``), solved by every casadi plugin that loads here: the
+    active-set ones and polished OSQP to 1e-9, the interior-point and proximal ones to their own accuracy."""
+    A, D = np.eye(2), np.array([[0.0], [1.0]])
+    p = GaussProblem(
+        A=A,
+        a0=np.array([1.0, -9.81]),
+        D=D,
+        J=D.T,
+        phi=np.zeros(1),
+        kind=["ge"],
+        lower=np.zeros(1),
+        upper=np.full(1, np.inf),
+    )
+    exact = solve_general(p, "daqp")
+    for name in (n for n in gp.qp.names() if n.startswith("casadi:")):
+        sol = solve_general(p, name)
+        tol = 1e-9 if name in ("casadi:qrqp", "casadi:daqp", "casadi:qpoases", "casadi:osqp") else 1e-6
+        assert sol.u == pytest.approx([9.81], rel=tol) and sol.a == pytest.approx(exact.a, abs=tol * 9.81), name
+
+
+def test_casadi_answers_face_the_dual_residual_check(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A casadi answer that is feasible but not optimal is refused, as a qpsolvers one is (DUAL_TOL)."""
+    from gausspp.step.qp import CasadiConic, QPAnswer
+
+    real = CasadiConic.solve_qp
+
+    def off_optimum(self: CasadiConic, problem):  # type: ignore[no-untyped-def]
+        answer = real(self, problem)
+        return QPAnswer(answer.x, dual=1e-3, found=True)
+
+    monkeypatch.setattr(CasadiConic, "solve_qp", off_optimum)
+    p = _problem(D=np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]), lower=np.full(2, -5.0), upper=np.full(2, 5.0))
+    with pytest.raises(gp.QPSolveError, match=r"qrqp returned a point that is not optimal.*dual residual"):
+        solve_general(p, "casadi:qrqp")
+
+
+def test_unknown_backend_lists_the_names() -> None:
+    model = _servo(bounds=(-9.5, 9.5))
+    with pytest.raises(gp.UnknownNameError, match=r"QP backend 'casadi:nosuch' is unknown; valid names here: \["):
+        model.step(0.0, [0, 0], [0, 1], backend="casadi:nosuch")
+    with pytest.raises(gp.UnknownNameError, match=r"QP backend 'nosuch' is unknown"):
+        solve_general(_problem(), "nosuch")
+
+
+def test_an_uninstalled_backend_is_an_error_not_a_swap(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Availability monkeypatched: a known solver that is not installed raises, naming what to install."""
+    import gausspp.step.qp as registry
+    from gausspp.step.qp import qpsolvers_route
+
+    monkeypatch.setattr(qpsolvers_route, "available", lambda: ["osqp"])
+    monkeypatch.setattr(registry, "plugin_available", lambda plugin: plugin == "qrqp")
+    registry._make.cache_clear()
+    try:
+        with pytest.raises(BackendUnavailableError, match=r"'qpsolvers:daqp'.*no solver 'daqp' installed"):
+            solve_general(_problem(), "qpsolvers:daqp")
+        with pytest.raises(BackendUnavailableError, match=r"'casadi:osqp'.*cannot load the conic plugin 'osqp'"):
+            _servo(bounds=(-9.5, 9.5)).step(0.0, [0, 0], [0, 1], backend="casadi:osqp")
+        assert check_backend(None) == "osqp"  # the general default: daqp not installed, so OSQP (declared order)
+    finally:
+        registry._make.cache_clear()
+
+
+def test_a_backend_that_solves_the_equality_form_only_is_refused_by_name() -> None:
+    """A user backend without the general form: a clear InputError naming the backends that do solve it."""
+
+    class EqualityOnly(gp.qp.QPBackend):
+        name = "mine:equality"
+
+        def solve(self, H: np.ndarray, S: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+            raise NotImplementedError
+
+    bounded = _problem(lower=np.array([-1.0]), upper=np.array([1.0]))
+    with pytest.raises(
+        gp.InputError, match=r"'mine:equality' does not solve QPs with bounds; backends that do: \[.*qrqp"
+    ):
+        solve_general(bounded, EqualityOnly())

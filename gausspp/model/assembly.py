@@ -16,8 +16,7 @@ import numpy as np
 
 from ..errors import ShapeError
 from ..step.expressions import StepExpressions
-from ..step.outcome import Group
-from ..step.protocol import ContactExpressions
+from ..step.protocol import ContactExpressions, Group
 from .constraints import Constraint, Unilateral
 from .mechanism import Mechanism
 

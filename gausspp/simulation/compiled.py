@@ -14,9 +14,11 @@ import numpy as np
 
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError, RealizabilityError
 from ..model.model import Model
+from ..step import realizability
 from ..step.expressions import OUTPUTS, reduce
 from ..step.kernel import CompiledKernel
 from ..step.qp.casadi_conic import stdout_silenced
+from ..step.realizability import MARGIN_BOUND_ROWS
 from . import methods as _methods
 from .drift import Stabilization, projection_function
 
@@ -87,31 +89,16 @@ def _rk_step(model: Model, F: ca.Function, tableau: _methods.Tableau, stab: Stab
     return ca.Function("rk_step", args, ca.cse(flat.call(args)))  # ... without repeated subexpressions
 
 
-#: Above this many constraint rows the compiled lane checks the margin at the recorded samples only (the bound
-#: below needs a symbolic k × k inverse).
-MARGIN_BOUND_ROWS = 8
-
-
 def margin_bound(model: Model) -> ca.Function:
-    """``(t, y) ↦ b`` with ``b ≤ σ_min(S_norm) ≤ √k · b``, the realizability margin within a factor √k.
-
-    ``b = 1 / √trace((S Sᵀ)⁻¹)``: ``trace((S Sᵀ)⁻¹) = Σ 1/σᵢ²`` lies between ``1/σ_min²`` and ``k/σ_min²``.
-    For one row it is the row's length, the margin itself. ``+inf`` when there are no rows or too many
-    (:data:`MARGIN_BOUND_ROWS`); 0 when ``S`` has more rows than columns.
-    """
+    """``(t, y) ↦ b`` with ``b ≤ σ_min(S_norm) ≤ √k · b``: :func:`gausspp.step.realizability.margin_bound`."""
     nq, nv, nl = model.nq, model.nv, model.n_lam
     t, y = ca.SX.sym("t"), ca.SX.sym("y", nq + nv + nl + 2)
     k, m = model.k, model.m
-    if k == 0 or k > MARGIN_BOUND_ROWS:
-        bound = ca.SX(np.inf)
-    elif k > m:
-        bound = ca.SX(0.0)
-    else:
+    S = ca.SX.zeros(k, m)
+    if 0 < k <= min(m, MARGIN_BOUND_ROWS):
         S_of = ca.Function("S_norm", model.inputs, [reduce(model.expressions).S_norm])
         S = S_of(t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], ca.SX.zeros(2))
-        G = S @ S.T
-        bound = 1 / ca.sqrt(ca.trace(ca.solve(G, ca.SX.eye(k)))) if k > 1 else ca.sqrt(G[0, 0])
-    return ca.Function("margin_bound", [t, y], [bound])
+    return ca.Function("margin_bound", [t, y], [realizability.margin_bound(S, k, m)])
 
 
 def _margin_failure(model: Model, times: np.ndarray, bounds: np.ndarray) -> tuple[int, Exception] | None:

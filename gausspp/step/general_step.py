@@ -14,11 +14,11 @@ import numpy as np
 
 from ..errors import InputError, NonFiniteError
 from .data import NO_STAB, StepData, evaluate
-from .model_qp import closed_rows, gauss_problem
 from .general import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, solve_general
 from .manifold import on_manifold, reference_problem
+from .model_qp import closed_rows, gauss_problem
 from .protocol import StepModel
-from .realizability import cosines
+from .realizability import cosines_and_margin
 from .results import StepResult
 
 
@@ -54,8 +54,7 @@ def _result(
     m, k = model.m, model.k
     contact_force = np.zeros(len(model.contact_row_names))
     contact_force[closed] = sol.u[m:]
-    cos = cosines(d.A, d.J, d.D) if k else np.zeros(0)
-    margin = (float(cos.min()) if m >= k and cos.size else 0.0) if k else 1.0
+    cos, margin = cosines_and_margin(d.A, d.J, d.D)
     return StepResult(
         t=t,
         a=sol.a,

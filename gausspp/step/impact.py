@@ -12,8 +12,8 @@ import numpy as np
 
 from ..errors import InputError
 from .data import evaluate
-from .model_qp import closed_rows, gauss_problem
 from .general import solve_general
+from .model_qp import closed_rows, gauss_problem
 from .protocol import StepModel
 from .results import ImpactResult
 

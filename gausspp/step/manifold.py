@@ -16,8 +16,8 @@ import numpy as np
 from ..errors import RealizabilityError
 from ..model.workspace import workspace
 from .data import evaluate
-from .model_qp import gauss_problem
 from .general import GaussProblem
+from .model_qp import gauss_problem
 from .protocol import StepModel
 from .redundancy import CLEARLY_INDEPENDENT, independent_rows
 

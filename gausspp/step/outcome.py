@@ -9,30 +9,21 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 
 from ..errors import NonFiniteError, NotPositiveDefiniteError, QPSolveError, RealizabilityError, RealizabilityWarning
-from .realizability import cosines
+from .data import StepProblem
+from .protocol import Group
+from .realizability import margin as realizability_margin
+from .realizability import margin_of, singular_values, step_margin
 from .results import StepResult
 
-if TYPE_CHECKING:
-    from .problem import StepProblem
+__all__ = ["QP_TOLERANCE", "Group", "Where", "evaluation_failed", "singular_values", "step_margin", "to_result"]
 
 
 #: Relative primal residual of the step QP above which the backend is deemed to have failed.
 QP_TOLERANCE = 1e-6
-
-
-class Group(NamedTuple):
-    """One constraint's rows of ``J`` and columns of ``D``, for messages."""
-
-    name: str
-    rows: slice
-    cols: slice
-    hint: str
-    label: str = ""
 
 
 @dataclass(frozen=True)
@@ -43,10 +34,6 @@ class Where:
     solver: str
     groups: Sequence[Group]
     data: Callable[[], StepProblem]
-
-
-def _smallest(values: np.ndarray) -> float:
-    return float(np.min(values)) if values.size else 0.0
 
 
 def _where(t: float) -> str:
@@ -86,7 +73,7 @@ def _not_positive_definite(data: StepProblem, t: float) -> NotPositiveDefiniteEr
 def _unrealizable(
     data: StepProblem, t: float, margin: float, groups: Sequence[Group], margin_error: float
 ) -> RealizabilityError:
-    solo = [(_smallest(cosines(data.A, data.J[g.rows], data.D[:, g.cols])), g) for g in groups]
+    solo = [(realizability_margin(data.A, data.J[g.rows], data.D[:, g.cols]), g) for g in groups]
     worst_margin, worst = min(solo, key=lambda s: s[0])
     if worst_margin < margin_error or len(groups) == 1:
         realization = f" by its {worst.label} realization" if worst.label else ""
@@ -115,9 +102,9 @@ def evaluation_failed(exc: RuntimeError, where: Where, *, margin_error: float) -
     _check_data(d, t, groups)
     if not np.all(np.linalg.eigvalsh(0.5 * (d.A + d.A.T)) > 0) or not np.allclose(d.A, d.A.T, rtol=1e-12, atol=0):
         return _not_positive_definite(d, t)
-    margin = _smallest(cosines(d.A, d.J, d.D))
-    if margin < margin_error:
-        return _unrealizable(d, t, margin, groups, margin_error)
+    whole = realizability_margin(d.A, d.J, d.D)
+    if whole < margin_error:
+        return _unrealizable(d, t, whole, groups, margin_error)
     return QPSolveError(f"the step failed {_where(t)} in {solver}: {str(exc).strip().splitlines()[-1]}")
 
 
@@ -134,7 +121,7 @@ def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, m
     S_norm = out["S_norm"]
     k, m = S_norm.shape if S_norm.ndim == 2 else (S_norm.size, 1)
     cos = np.zeros(min(k, m)) if not finite and not np.isfinite(S_norm.sum()) else singular_values(S_norm, k, m)
-    margin = float(cos[-1]) if k <= m and cos.size else 0.0
+    margin = margin_of(cos, k, m)
     if margin < margin_error:
         raise _unrealizable(data(), t, margin, groups, margin_error)
     if not finite and not all(np.all(np.isfinite(v)) for name, v in out.items() if name not in ("S_norm", "checksum")):
@@ -180,21 +167,3 @@ def warn_small_margin(
             RealizabilityWarning,
             stacklevel=stacklevel,
         )
-
-
-def singular_values(S_norm: np.ndarray, k: int, m: int) -> np.ndarray:
-    """Singular values of the normalized ``S`` (k × m), largest first; for one row, its length."""
-    if k == 1:
-        row = S_norm.ravel()
-        return np.array([np.sqrt(float(row @ row))])
-    return np.linalg.svd(S_norm.reshape(k, m, order="F"), compute_uv=False)
-
-
-def step_margin(S_norm: np.ndarray, k: int, m: int) -> float:
-    """The realizability margin ``σ_k`` of the normalized ``S``: 0 when ``S`` is singular or has more rows than
-    columns; NaN in, NaN out (the caller's finite check fails)."""
-    if k == 0:
-        return 1.0
-    if k > m:
-        return 0.0
-    return float(singular_values(S_norm, k, m)[k - 1])

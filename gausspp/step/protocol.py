@@ -13,7 +13,16 @@ import casadi as ca
 import numpy as np
 
 from .expressions import StepExpressions
-from .outcome import Group
+
+
+class Group(NamedTuple):
+    """One constraint's block of the step: its rows of ``J``, columns of ``D``, and how to name it in messages."""
+
+    name: str
+    rows: slice
+    cols: slice
+    hint: str  # how to fix an unrealizable constraint (from its realization)
+    label: str = ""  # the realization's name
 
 
 class ContactExpressions(NamedTuple):

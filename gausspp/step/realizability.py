@@ -1,17 +1,28 @@
-"""Realizability of a constraint by a reaction: conditions (12) and (16) as a number.
+"""Realizability of a constraint by a reaction: conditions (12) and (16) as a number — computed here only.
 
 The step is solvable iff ``S = J A⁻¹ D`` is nonsingular. A scale-free measure: the singular
 values of ``S`` after normalizing each row of ``J`` and each column of ``D`` in the kinetic
-metric ``A⁻¹``. They do not depend on units or coordinates; for one constraint the single
-value is the cosine of the angle between the constraint normal and the reaction direction
-(1 for an ideal constraint); the smallest, the *margin*, vanishes exactly when the
+metric ``A⁻¹`` (``S_norm``). They do not depend on units or coordinates; for one constraint the
+single value is the cosine of the angle between the constraint normal and the reaction direction
+(1 for an ideal constraint); the smallest, the *margin* ``σ_k``, vanishes exactly when the
 realization cannot keep the constraints — or when the constraint rows (or the reaction
-directions) are redundant.
+directions) are redundant. By convention the margin is 1 with no constraint rows and 0 with
+fewer reaction directions than rows (``k > m``: ``S`` cannot have rank ``k``).
+
+Every margin of the package comes from here: from the data (:func:`cosines`, :func:`margin`,
+:func:`cosines_and_margin`), from a kernel's ``S_norm`` (:func:`singular_values`,
+:func:`step_margin`), inside a casadi graph (:func:`margin_bound`), all through the one rule
+:func:`margin_of`.
 """
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
+
+#: Above this many constraint rows :func:`margin_bound` is ``+inf`` (it needs a symbolic k × k inverse):
+#: the compiled lane then checks the margin at the recorded samples only.
+MARGIN_BOUND_ROWS = 8
 
 
 def cosines(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> np.ndarray:
@@ -38,9 +49,54 @@ def cosines(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> np.ndarray:
     return np.linalg.svd(S, compute_uv=False)
 
 
+def margin_of(cos: np.ndarray, k: int, m: int) -> float:
+    """The margin ``σ_k`` from the cosines of ``k`` rows and ``m`` directions: 1 if ``k = 0``, 0 if ``k > m``
+    (or no cosines), else the smallest (NaN in, NaN out: the caller's finite check fails)."""
+    if k == 0:
+        return 1.0
+    if k > m or cos.size == 0:
+        return 0.0
+    return float(np.min(cos))
+
+
+def cosines_and_margin(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`cosines` and :func:`margin_of` them, for ``J`` of shape (k, n) and ``D`` (n, m); ``k = 0`` allowed."""
+    J2, D2 = np.atleast_2d(J), np.atleast_2d(D)
+    k, m = (J2.shape[0] if np.size(J) else 0), D2.shape[1]
+    cos = cosines(A, J2, D2) if k else np.zeros(0)
+    return cos, margin_of(cos, k, m)
+
+
 def margin(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> float:
     """The realizability margin: the smallest of :func:`cosines` (0 if fewer directions than rows)."""
-    J2, D2 = np.atleast_2d(J), np.atleast_2d(D)
-    if D2.shape[1] < J2.shape[0]:
-        return 0.0
-    return float(np.min(cosines(A, J2, D2)))
+    return cosines_and_margin(A, J, D)[1]
+
+
+def singular_values(S_norm: np.ndarray, k: int, m: int) -> np.ndarray:
+    """Singular values of a kernel's normalized ``S`` (k × m), largest first; for one row, its length."""
+    if k == 1:
+        row = S_norm.ravel()
+        return np.array([np.sqrt(float(row @ row))])
+    return np.linalg.svd(S_norm.reshape(k, m, order="F"), compute_uv=False)
+
+
+def step_margin(S_norm: np.ndarray, k: int, m: int) -> float:
+    """The margin ``σ_k`` of a kernel's normalized ``S`` (:func:`margin_of` its :func:`singular_values`)."""
+    if k == 0 or k > m:
+        return margin_of(np.zeros(0), k, m)
+    return margin_of(singular_values(S_norm, k, m), k, m)
+
+
+def margin_bound(S: ca.SX, k: int, m: int) -> ca.SX:
+    """In a casadi graph: ``b`` with ``b ≤ σ_min(S) ≤ √k · b``, the margin within a factor √k.
+
+    ``b = 1 / √trace((S Sᵀ)⁻¹)``: ``trace((S Sᵀ)⁻¹) = Σ 1/σᵢ²`` lies between ``1/σ_min²`` and ``k/σ_min²``.
+    For one row it is the row's length, the margin itself. ``+inf`` with no rows or more than
+    :data:`MARGIN_BOUND_ROWS`; 0 when ``k > m`` (as :func:`margin_of`).
+    """
+    if k == 0 or k > MARGIN_BOUND_ROWS:
+        return ca.SX(np.inf)
+    if k > m:
+        return ca.SX(margin_of(np.zeros(0), k, m))
+    G = S @ S.T
+    return 1 / ca.sqrt(ca.trace(ca.solve(G, ca.SX.eye(k)))) if k > 1 else ca.sqrt(G[0, 0])

@@ -9,9 +9,11 @@ the paper (§3) and docs/theory.md §3, assembled from the step's data ``A, a₀
     subject to J a = φ                                 (the constraint, eq. (11))
                Pᵀ A (a − a₀) = 0                       (the reaction A(a − a₀) lies in range(D))
 
-with ``P`` an orthonormal basis of ``ker Dᵀ`` (from an SVD of ``D``), solved by a qpsolvers backend
-with numpy's data — no casadi, no Cholesky factor, no reaction-space unknowns. Its KKT residuals
-(primal and dual) are reported with it.
+with ``P`` an orthonormal basis of ``ker Dᵀ`` (from an SVD of ``D``), posed with numpy's data — no
+casadi graph, no Cholesky factor, no reaction-space unknowns — and solved by a backend of the QP
+registry chosen by name (default: the first installed of
+:data:`gausspp.step.qp.REFERENCE_DEFAULTS`, exact qpsolvers codes, none of them the compiled
+step's default). Its KKT residuals (primal and dual) are reported with it.
 
 :func:`crosscheck` compares the model's *raw* answers (``refine=False``: what each solver itself
 returned) with this reference, and the refined ones apart.
@@ -19,26 +21,16 @@ returned) with this reference, and the refined ones apart.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import qpsolvers
 
-from ..errors import (
-    BackendUnavailableError,
-    InputError,
-    NonFiniteError,
-    NotPositiveDefiniteError,
-    QPSolveError,
-    UnknownNameError,
-)
-from ..step.qp.casadi_conic import stdout_silenced
-from ..step.qp.qpsolvers_route import OPTIONS
+from ..errors import InputError, NonFiniteError, NotPositiveDefiniteError, QPSolveError
+from ..step import qp
 
-#: Backends tried in this order for the reference: exact dense active-set codes first, OSQP last.
-REFERENCE_BACKENDS = ("daqp", "quadprog", "osqp")
+#: Backends tried in this order for the reference (declared in the registry): exact dense active-set codes first.
+REFERENCE_BACKENDS = qp.REFERENCE_DEFAULTS
 #: Relative distance from the reference (and KKT residual of the reference) above which a check fails.
 TOLERANCE = 1e-9
 
@@ -50,7 +42,7 @@ class AccelerationQP:
     Attributes
     ----------
     a : (n,)        the acceleration
-    backend : str   the qpsolvers solver that found it
+    backend : str   the backend that found it (its short name, :func:`gausspp.step.qp.short_name`)
     primal : float  ``max |E a − e|`` over the (unit) equality rows, relative to ``1 + max |a|``
     dual : float    ``max |A a − A a₀ + Eᵀ y|``, relative to ``max |A| · (1 + max |a|)``
     """
@@ -61,20 +53,9 @@ class AccelerationQP:
     dual: float
 
 
-def reference_backend(name: str | None = None) -> str:
-    """``name`` if qpsolvers has it, else the first of :data:`REFERENCE_BACKENDS` installed."""
-    available = qpsolvers.available_solvers
-    if name is not None:
-        bare = name.rpartition(":")[2]
-        if bare not in available:
-            raise UnknownNameError(
-                f"reference backend {name!r} is not installed here; qpsolvers has {sorted(available)}"
-            )
-        return bare
-    for candidate in REFERENCE_BACKENDS:
-        if candidate in available:
-            return candidate
-    raise BackendUnavailableError("no QP solver for the reference: `pip install osqp`")
+def reference_backend(name: str | None = None) -> qp.QPBackend:
+    """The registry's backend for ``name`` (``None``: :func:`gausspp.step.qp.default` ``("reference")``)."""
+    return qp.get(qp.default("reference") if name is None else name)
 
 
 def acceleration_qp(
@@ -88,7 +69,7 @@ def acceleration_qp(
     a0 : (n,) array    the acceleration with no reaction unknowns, ``A⁻¹(F − h + r₀)``
     J : (k, n) array   constraint rows;  phi : (k,) array  their right-hand sides
     D : (n, m) array   the realization's reaction directions
-    backend : str, optional   a qpsolvers solver (default: :func:`reference_backend`)
+    backend : str, optional   a name of :func:`gausspp.step.qp.names` (default: :func:`reference_backend`)
     """
     A, a0, J, phi, D = (np.asarray(x, dtype=float) for x in (A, a0, J, phi, D))
     n = A.shape[0]
@@ -111,20 +92,37 @@ def acceleration_qp(
     size[size == 0] = 1.0
     E, e = E / size[:, None], e / size
     weight = float(np.max(np.abs(A)))
-    problem = qpsolvers.Problem(A / weight, -(A @ a0) / weight, A=E, b=e)
-    with warnings.catch_warnings(), stdout_silenced():
-        warnings.simplefilter("ignore")
-        try:
-            sol = qpsolvers.solve_problem(problem, solver=solver, **OPTIONS.get(solver, {}))
-        except Exception as exc:  # the backend's own error, as ours
-            raise QPSolveError(f"the reference QP failed in {solver}: {exc}") from exc
-    if not sol.found or sol.x is None or not np.all(np.isfinite(sol.x)):
-        raise QPSolveError(f"{solver} found no solution of the reference QP (the constraint may not be realizable)")
-    a = np.asarray(sol.x, dtype=float)
-    y = np.zeros(E.shape[0]) if sol.y is None else np.asarray(sol.y, dtype=float)
+    problem = qp.QP(
+        A / weight,
+        -(A @ a0) / weight,
+        E,
+        e,
+        np.zeros((0, n)),
+        np.zeros(0),
+        np.full(n, -np.inf),
+        np.full(n, np.inf),
+        "reference",
+    )
+    answer = _solve(problem, solver)
+    a = np.asarray(answer.x, dtype=float)
     primal = float(np.max(np.abs(E @ a - e))) / (1.0 + float(np.max(np.abs(a))))
-    dual = float(np.max(np.abs(A @ (a - a0) / weight + E.T @ y))) / (1.0 + float(np.max(np.abs(a))))
-    return AccelerationQP(a=a, backend=solver, primal=primal, dual=dual)
+    # the backend's stationarity residual max|A(a − a₀)/w + Eᵀy| from its own multipliers (inf when it gave none)
+    dual = (answer.dual if np.isfinite(answer.dual) else np.inf) / (1.0 + float(np.max(np.abs(a))))
+    return AccelerationQP(a=a, backend=qp.short_name(solver), primal=primal, dual=dual)
+
+
+def _solve(problem: qp.QP, backend: qp.QPBackend) -> qp.QPAnswer:
+    """The reference QP by ``backend``; no answer, or one the backend does not call a solution, is an error."""
+    qp.require(backend, problem.features)
+    try:
+        answer = backend.solve_qp(problem)
+    except Exception as exc:  # the backend's own error, as ours
+        raise QPSolveError(f"the reference QP failed in {backend.name}: {exc}") from exc
+    if not answer.found or answer.x is None or not np.all(np.isfinite(answer.x)):
+        raise QPSolveError(
+            f"{backend.name} found no solution of the reference QP (the constraint may not be realizable)"
+        )
+    return answer
 
 
 @dataclass(frozen=True)

@@ -1,30 +1,75 @@
-"""QP backends behind one registry: ``get(name)``, ``names()``, ``DEFAULT``.
+"""QP backends behind one registry: every QP form the project solves goes through :func:`get`.
 
-Two routes to the same Gauss QP (docs/theory.md §3):
+Two routes (docs/theory.md §3), each solving both forms of :mod:`.base` (the equality form of
+the compiled step, and the general form — bounds, inequalities, least squares — of
+:mod:`gausspp.step.general`'s stages):
 
-* ``casadi:<plugin>`` — compiled into the model's casadi graph (a step is one C call);
+* ``casadi:<plugin>`` — casadi's ``conic`` plugins; in the compiled step the QP is a node of the
+  model's casadi graph (a step is one C call);
 * ``qpsolvers:<solver>`` — any solver qpsolvers finds installed, called from Python.
 
-A bare solver name (``"osqp"``) means the compiled route when casadi ships that plugin.
-The default, ``casadi:qrqp``, measured fastest among the round-off-accurate backends on
-this hardware (``benchmarks/step.py``: ≈1.5 µs per QP step, agreement with the direct
-solution at 1e-15); OSQP, the core dependency, is always available as ``casadi:osqp`` and
-``qpsolvers:osqp`` but is an iterative method (≈13 µs and accurate only after polishing).
+A name means one solver on every path. A bare solver name is resolved once, by :func:`canonical`:
+the qpsolvers solver when qpsolvers has it installed (``"daqp"`` → ``"qpsolvers:daqp"``), else the
+casadi plugin (``"qrqp"`` → ``"casadi:qrqp"``). An unknown name is an
+:class:`~gausspp.errors.UnknownNameError` listing :func:`names`; a known solver that is not
+installed here is a :class:`~gausspp.errors.BackendUnavailableError` — never a substitute.
+
+Defaults, one per form, declared here (:func:`default`):
+
+* the compiled step: :data:`DEFAULT`, ``casadi:qrqp`` — measured fastest among the round-off-accurate
+  backends (``benchmarks/step.py``: ≈1.5 µs per QP step, agreement with the direct solution at 1e-15);
+  OSQP, the core dependency, is always available but iterative (≈13 µs, accurate only after polishing);
+* the general QP: the first installed of :data:`GENERAL_DEFAULTS`, ``qpsolvers:daqp`` then
+  ``qpsolvers:osqp``. Measured on ``benchmarks/general_qp.py`` (saturated crane, two-actuator servo
+  bounded and saturated, redundant four-bar): daqp, OSQP and ``casadi:qrqp`` agree to ≤ 1.2e-15, so
+  accuracy does not choose; daqp's QP time was the lowest on 4 of the 5 cases (qrqp's on the
+  saturated crane), and daqp is the default the tests and docs were measured with;
+* the cross-check's independent reference: the first installed of :data:`REFERENCE_DEFAULTS`.
 """
 
 from __future__ import annotations
 
 import functools
 
-from ...errors import BackendUnavailableError, UnknownNameError
+from ...errors import BackendUnavailableError, InputError, UnknownNameError
 from . import qpsolvers_route
-from .base import QPBackend
+from .base import ALL_FORMS, FORMS, QP, QPAnswer, QPBackend
 from .casadi_conic import PLUGINS, CasadiConic, plugin_available
 from .qpsolvers_route import QpsolversBackend
 
+#: The compiled step's default backend.
 DEFAULT = "casadi:qrqp"
+#: The general QP's default: the first of these installed here.
+GENERAL_DEFAULTS = ("qpsolvers:daqp", "qpsolvers:osqp")
+#: The cross-check's reference (:mod:`gausspp.verification.crosscheck`): exact dense active-set codes first,
+#: OSQP last; none of them the compiled step's default, so that the reference shares no solver with it.
+REFERENCE_DEFAULTS = ("qpsolvers:daqp", "qpsolvers:quadprog", "qpsolvers:osqp")
+#: Each form's default, in order of preference.
+DEFAULTS: dict[str, tuple[str, ...]] = {
+    "step": (DEFAULT,),
+    "general": GENERAL_DEFAULTS,
+    "reference": REFERENCE_DEFAULTS,
+}
 
-__all__ = ["DEFAULT", "CasadiConic", "QPBackend", "QpsolversBackend", "get", "names"]
+__all__ = [
+    "ALL_FORMS",
+    "DEFAULT",
+    "DEFAULTS",
+    "FORMS",
+    "GENERAL_DEFAULTS",
+    "REFERENCE_DEFAULTS",
+    "QP",
+    "CasadiConic",
+    "QPAnswer",
+    "QPBackend",
+    "QpsolversBackend",
+    "canonical",
+    "default",
+    "get",
+    "names",
+    "require",
+    "short_name",
+]
 
 
 def names() -> list[str]:
@@ -33,21 +78,43 @@ def names() -> list[str]:
     return compiled + [f"qpsolvers:{s}" for s in qpsolvers_route.available()]
 
 
+def _unknown(name: str) -> UnknownNameError:
+    return UnknownNameError(f"QP backend {name!r} is unknown; valid names here: {names()}")
+
+
+def canonical(name: str) -> str:
+    """``"route:solver"`` for ``name``; a bare solver name by the rule of the module docstring."""
+    if ":" in name:
+        return name
+    if name in qpsolvers_route.available():
+        return f"qpsolvers:{name}"
+    if name in PLUGINS and plugin_available(name):
+        return f"casadi:{name}"
+    if name in PLUGINS:  # known to both routes perhaps, installed in neither: say what is missing
+        return f"casadi:{name}"
+    if name in qpsolvers_route.known():
+        return f"qpsolvers:{name}"
+    raise _unknown(name)
+
+
 @functools.cache
 def _make(name: str) -> QPBackend:
     route, _, solver = name.partition(":")
     if route == "casadi" and solver in PLUGINS:
         if not plugin_available(solver):
-            raise BackendUnavailableError(f"casadi on this machine cannot load the conic plugin {solver!r}")
+            raise BackendUnavailableError(
+                f"QP backend {name!r}: casadi on this machine cannot load the conic plugin {solver!r}; "
+                f"installed backends: {names()}"
+            )
         return CasadiConic(solver)
-    if route == "qpsolvers":
+    if route == "qpsolvers" and solver in qpsolvers_route.known():
         if solver not in qpsolvers_route.available():
             raise BackendUnavailableError(
-                f"qpsolvers has no solver {solver!r} installed here (installed: {qpsolvers_route.available()}); "
-                f"try `pip install qpsolvers[{solver}]`"
+                f"QP backend {name!r}: qpsolvers has no solver {solver!r} installed here "
+                f"(installed: {qpsolvers_route.available()}); try `pip install qpsolvers[{solver}]`"
             )
         return QpsolversBackend(solver)
-    raise UnknownNameError(f"QP backend {name!r} is unknown; valid names here: {names()}")
+    raise _unknown(name)
 
 
 def get(name: str | QPBackend | None = None) -> QPBackend:
@@ -58,11 +125,41 @@ def get(name: str | QPBackend | None = None) -> QPBackend:
         name = DEFAULT
     if not isinstance(name, str):
         raise UnknownNameError(f"QP backend must be a name or a QPBackend, got {type(name).__name__}")
-    if ":" not in name:
-        if name in PLUGINS:
-            name = f"casadi:{name}"
-        elif name in qpsolvers_route.available():
-            name = f"qpsolvers:{name}"
-        else:
-            raise UnknownNameError(f"QP backend {name!r} is unknown; valid names here: {names()}")
-    return _make(name)
+    return _make(canonical(name))
+
+
+def default(form: str = "step") -> str:
+    """The default backend's name for ``form`` (a key of :data:`DEFAULTS`): the first of its list installed here.
+
+    The compiled step's :data:`DEFAULT` is returned as declared (an uninstalled one is reported when used).
+    """
+    if form not in DEFAULTS:
+        raise UnknownNameError(f"QP form {form!r} is unknown; use one of {sorted(DEFAULTS)}")
+    if form == "step":
+        return DEFAULT
+    installed = set(names())
+    for candidate in DEFAULTS[form]:
+        if candidate in installed:
+            return candidate
+    raise BackendUnavailableError(f"none of {list(DEFAULTS[form])} is installed: `pip install osqp`")
+
+
+def require(backend: QPBackend, features: frozenset[str] | set[str]) -> QPBackend:
+    """``backend`` if it solves QPs with ``features`` (:data:`FORMS`), else an error naming those that do."""
+    missing = set(features) - set(backend.forms)
+    if missing:
+        able = [n for n in names() if set(features) <= set(get(n).forms)]
+        raise InputError(
+            f"QP backend {backend.name!r} does not solve QPs with {', '.join(sorted(missing))}; "
+            f"backends that do: {able}"
+        )
+    return backend
+
+
+def short_name(backend: QPBackend) -> str:
+    """The shortest name that resolves to ``backend``: the bare solver where the bare name means it."""
+    bare = backend.name.partition(":")[2]
+    try:
+        return bare if bare and canonical(bare) == backend.name else backend.name
+    except UnknownNameError:
+        return backend.name

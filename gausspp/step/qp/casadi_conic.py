@@ -2,7 +2,10 @@
 
 A step that uses one of these backends is a single C call (through ``Function.buffer()``),
 the QP included. Each plugin's options below ask for the accuracy the cross-check against
-the direct solution needs.
+the direct solution needs. The same plugins solve the general form (bounds, inequalities, a
+linear term) from Python, through casadi's ``conic`` inputs ``lba ≤ a x ≤ uba``, ``lbx ≤ x ≤ ubx``
+(measured: every plugin listed solves it; ``daqp`` refuses a semidefinite Hessian, which the
+stages then report).
 """
 
 from __future__ import annotations
@@ -19,7 +22,7 @@ import casadi as ca
 import numpy as np
 
 from ...errors import QPSolveError
-from .base import QPBackend
+from .base import ALL_FORMS, QP, QPAnswer, QPBackend
 
 _QUIET = {"print_iter": False, "print_header": False, "print_info": False}
 
@@ -82,6 +85,7 @@ class CasadiConic(QPBackend):
     """A casadi ``conic`` plugin; the QP becomes a node of the model's graph."""
 
     compiled = True
+    forms = ALL_FORMS
 
     def __init__(self, plugin: str, options: dict[str, Any] | None = None, name: str | None = None) -> None:
         """``options`` replace the plugin's defaults of :data:`PLUGINS` (give ``name`` to tell them apart)."""
@@ -117,3 +121,23 @@ class CasadiConic(QPBackend):
                 "try another backend or solver='direct'"
             )
         return u, np.array(sol["lam_a"]).ravel()
+
+    def solve_qp(self, problem: QP) -> QPAnswer:
+        """The general form: ``E`` and ``G`` stacked as ``a`` with ``lba = [e; −∞]``, ``uba = [e; h]``.
+
+        casadi's multipliers follow ``P x + q + aᵀ λ_a + λ_x = 0``, from which the dual residual is computed.
+        """
+        p = problem
+        m = p.q.size
+        a = np.vstack([p.E.reshape(-1, m), p.G.reshape(-1, m)])
+        lba = np.concatenate([p.e, np.full(p.h.size, -np.inf)])
+        uba = np.concatenate([p.e, p.h])
+        solver = self._conic(m, a.shape[0])
+        with stdout_silenced():
+            sol = solver(h=p.P, g=p.q, a=a, lba=lba, uba=uba, lbx=p.lo, ubx=p.hi)
+        x = np.array(sol["x"]).ravel()
+        if not solver.stats().get("success", True) or not np.all(np.isfinite(x)):
+            return QPAnswer(None, found=False)
+        lam_a, lam_x = np.array(sol["lam_a"]).ravel(), np.array(sol["lam_x"]).ravel()
+        dual = float(np.max(np.abs(p.P @ x + p.q + a.T @ lam_a + lam_x), initial=0.0))
+        return QPAnswer(x, dual)

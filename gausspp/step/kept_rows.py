@@ -1,0 +1,111 @@
+"""Which bilateral rows the general Gauss step keeps, decided where :mod:`gausspp.step.redundancy` says.
+
+The rows are judged at a *reference* (:class:`~gausspp.step.scaling.Scaled`): the state itself, or
+the same problem at the nearest state on the constraint manifold when the state cannot decide —
+rows independent here but not clearly so (:data:`~gausspp.step.redundancy.CLEARLY_INDEPENDENT`),
+dependent rows that disagree, or dropped rows with no witness that they hold together. There the
+realizations must keep their constraints (``rank S ≥ rank J``, conditions (12)/(16)) and the dropped
+rows must agree with the kept ones to the consistency tolerance; either failure is a
+:class:`~gausspp.errors.RealizabilityError`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import RealizabilityError
+from .gauss_problem import GaussProblem, at, row_names
+from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL, independent_rows
+from .scaling import Scaled, scaled, svd_rank
+
+#: The problem on the manifold, or a function that builds it (``None``: the state is on it already).
+Reference = GaussProblem | Callable[[], GaussProblem | None] | None
+
+
+@dataclass(frozen=True)
+class Rows:
+    """The decision: the reference it was taken at, the bilateral rows kept, and how many were dropped."""
+
+    ref: Scaled
+    kept: np.ndarray
+    redundant: int
+
+
+def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
+    """The bilateral rows kept (:func:`~gausspp.step.redundancy.independent_rows` at ``ref``), how far the
+    dropped ones contradict the kept ones there (relative to the right-hand side's size), and each row's sine
+    against the rows kept before it."""
+    eq_rows = np.flatnonzero(eq)
+    kept_local, sines = independent_rows(ref.Jn[eq_rows])
+    kept = eq_rows[kept_local]
+    gap = 0.0
+    if kept.size < eq_rows.size:
+        dropped = eq_rows[np.isin(np.arange(eq_rows.size), kept_local, invert=True)]
+        if kept.size:  # each dropped row as a combination of the kept ones; its right-hand side must follow
+            combo = np.linalg.lstsq(ref.Jn[kept].T, ref.Jn[dropped].T, rcond=None)[0]
+            gap = float(np.max(np.abs(ref.r[dropped] - combo.T @ ref.r[kept])))
+        else:
+            gap = float(np.max(np.abs(ref.r[dropped])))
+    return kept, gap / max(ref.scale, 1e-300), sines
+
+
+def check_realizable(p: GaussProblem, ref: Scaled, mask: np.ndarray) -> None:
+    """Raise unless the realizations keep the rows ``mask``: ``rank S ≥ rank J`` at the reference.
+
+    ``S = J A⁻¹ D`` is compared with the Gram matrix ``J A⁻¹ Jᵀ`` (the ideal realization's ``S``): both
+    square the smallness of nearly dependent rows, so near-redundancy is not mistaken for a failing realization.
+    """
+    if not mask.any():
+        return
+    Jn = ref.Jn[mask]
+    rank_J = svd_rank(Jn @ Jn.T)[3]
+    rank_S = svd_rank(ref.S[mask])[3]
+    if rank_S < rank_J:
+        names = row_names(p)
+        raise RealizabilityError(
+            f"the realization cannot keep the constraint(s) "
+            f"{sorted({names[i].split('[')[0] for i in np.flatnonzero(mask)})}{at(p.t)}: "
+            f"J A⁻¹ D has rank {rank_S} < rank J = {rank_J} (conditions (12)/(16)); "
+            "choose reaction directions that are not A-orthogonal to the constraint's normal",
+            t=p.t,
+            constraint=names[int(np.flatnonzero(mask)[0])],
+            margin=0.0,
+        )
+
+
+def _contradiction(p: GaussProblem, eq: np.ndarray, gap: float) -> RealizabilityError:
+    names = row_names(p)
+    involved = sorted({names[i].split("[")[0] for i in np.flatnonzero(eq)})
+    return RealizabilityError(
+        f"the constraint rows of {', '.join(map(repr, involved))} are dependent and contradict each other{at(p.t)} "
+        f"(relative inconsistency {gap:.2e} on the constraint manifold): the redundant rows describe different "
+        "constraints — remove one of them",
+        t=p.t,
+        constraint=names[int(np.flatnonzero(eq)[0])],
+        margin=0.0,
+    )
+
+
+def decide_rows(p: GaussProblem, s: Scaled, consistency_tol: float, reference: Reference, near_manifold: bool) -> Rows:
+    """The rows kept (see the module docstring); ``s`` is ``p`` scaled, the reference unless one is needed."""
+    kind = np.asarray(p.kind)
+    eq, track = kind == "eq", kind == "track"
+    ref = s
+    kept, gap, sines = kept_rows(ref, eq)
+    # rows that are independent here but not clearly so, or dependent rows that disagree, may be an artefact of
+    # the state's distance from the manifold: decide at the nearest state on it
+    ambiguous = bool(np.any((sines > DEPENDENCE_TOL) & (sines < CLEARLY_INDEPENDENT))) or gap > consistency_tol
+    # dropped rows must hold together near the state: checked at the reference unless the state is a witness
+    ambiguous = ambiguous or (kept.size < int(eq.sum()) and not near_manifold)
+    if ambiguous and reference is not None:
+        on_manifold = reference() if callable(reference) else reference
+        if on_manifold is not None:
+            ref = scaled(on_manifold)
+            kept, gap, sines = kept_rows(ref, eq)
+    check_realizable(p, ref, eq | track)
+    if gap > consistency_tol:
+        raise _contradiction(p, eq, gap)
+    return Rows(ref, kept, int(eq.sum()) - kept.size)
