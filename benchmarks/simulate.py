@@ -21,8 +21,8 @@ import warnings
 import numpy as np
 
 import gausspp as gp
-from gausspp.simulation import methods
-from gausspp.simulation.compiled import _rk_step, rhs_function
+from gausspp.simulation import lanes, methods
+from gausspp.simulation.compiled import rhs_function, rk_step_function
 from gausspp.simulation.drift import Stabilization
 
 RUNS = [
@@ -54,8 +54,8 @@ def scene_table(horizon: float, repeats: int) -> None:
         t_end = min(scene.t_end, horizon)
         for method, opts in RUNS:
             for solver in ("direct", "qp"):
-                if method == "cvodes" and solver == "qp":
-                    continue  # CVODES differentiates the right-hand side: direct path only
+                if not lanes.accepts(methods.get(method), solver):
+                    continue  # e.g. CVODES differentiates the right-hand side: direct path only
                 try:
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
@@ -90,7 +90,7 @@ def compiled_step_cost(steps: int = 20_000) -> None:
     print(f"\ncompiled lane, pendulum, one mapaccum call of {steps} RK4 steps (minimum of 5):")
     for solver, target in (("direct", 2.0), ("qp", 8.0)):
         F = rhs_function(scene.model, solver, None)
-        run = _rk_step(scene.model, F, methods.RK4, Stabilization()).mapaccum("run", steps)
+        run = rk_step_function(scene.model, F, methods.RK4, Stabilization()).mapaccum("run", steps)
         y0 = np.concatenate([scene.q0, scene.v0, np.zeros(scene.model.n_lam), [0.0, 0.0]])
         t, h = (np.arange(steps) * 1e-4)[None, :], np.full((1, steps), 1e-4)
         per_step = best_of(5, lambda: run(y0, t, h, np.zeros(2)))[0] / steps * 1e6

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 import gausspp as gp
 from gausspp.scenes.block_on_floor import bounce_times
 from gausspp.scenes.bouncing_pendulum import impact_times
-from gausspp.simulation.contacts import _gaps
+from gausspp.simulation.contacts import gaps as contact_gaps
 from gausspp.step.general import GaussProblem, solve_general
 
 from .factories import random_spd
@@ -71,7 +71,7 @@ def test_block_comes_to_rest_with_contact_force_equal_to_its_weight(block_run) -
 
 def test_block_never_penetrates_and_its_energy_balance_closes(block_run) -> None:
     scene, traj = block_run
-    gaps = np.array([_gaps(scene.model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
+    gaps = np.array([contact_gaps(scene.model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
     assert gaps.min() >= -1e-12
     # the impulses' work is booked as the reaction's work: ΔE − W_R = 0 through every impact
     assert np.max(np.abs(traj.energy_balance())) <= 1e-10
@@ -96,7 +96,7 @@ def test_impacts_lose_energy_by_e_squared_for_the_normal_motion(block_run) -> No
 def test_a_tilted_block_rocks_and_settles_on_both_corners() -> None:
     scene = gp.scenes.get("block-on-floor", tilt=0.3, e=0.3, drop=0.2, t_end=2.5)
     traj = gp.simulate(scene.model, scene.q0, scene.v0, scene.t_end, rtol=1e-11, atol=1e-13)
-    gaps = np.array([_gaps(scene.model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
+    gaps = np.array([contact_gaps(scene.model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
     assert gaps.min() >= -1e-12
     assert np.max(np.abs(traj.energy_balance())) <= 1e-8
     kinds = {ev["kind"] for ev in traj.events}
@@ -197,7 +197,7 @@ def test_unilateral_and_contact_simulation_input_errors() -> None:
 def test_a_contact_run_that_fails_keeps_what_it_computed() -> None:
     model = _ball(1.0)  # elastic: never comes to rest, events pile up
     with pytest.raises(gp.IntegrationError, match="contact events") as info:
-        from gausspp.simulation.contacts import simulate_contacts
+        from gausspp.simulation.events import simulate_contacts
 
         simulate_contacts(model, [0.0, 1.0], [0.0, 0.0], 10.0, max_events=3)
     traj = info.value.trajectory  # type: ignore[attr-defined]
@@ -272,7 +272,7 @@ def test_a_point_mass_dropped_on_a_floor_bounces_and_rests_as_the_closed_form_sa
 def test_a_block_that_tips_over_lands_on_its_top_corners_instead_of_sinking() -> None:
     scene = gp.scenes.get("block-on-floor", tilt=0.3, e=0.7, drop=0.5, t_end=3.0)
     traj = gp.simulate(scene.model, scene.q0, scene.v0, scene.t_end, rtol=1e-10, atol=1e-12)
-    gaps = np.array([_gaps(scene.model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
+    gaps = np.array([contact_gaps(scene.model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
     assert gaps.min() >= -1e-12  # every corner, the whole run
     assert np.max(np.abs(traj.energy_balance())) <= 1e-8
     assert traj.energy[-1] >= -1e-9  # never below the floor's potential of the lowest state
@@ -296,14 +296,14 @@ def test_a_closed_contact_that_separates_by_acceleration_does_not_chatter() -> N
     omega = -8.0
     # ż such that the lower corner's gap rate is zero: ġ = ż + (w/2) cos θ θ̇·s + (h/2) sin θ θ̇
     w, h, th = scene.params["w"], scene.params["h"], q0[2]
-    lower = int(np.argmin(_gaps(model, 0.0, q0, np.zeros(3))[0]))
+    lower = int(np.argmin(contact_gaps(model, 0.0, q0, np.zeros(3))[0]))
     s = 1.0 if lower == 0 else -1.0
     zdot = -(s * 0.5 * w * np.cos(th) + 0.5 * h * np.sin(th)) * omega
     v0 = np.array([0.0, zdot, omega])
-    assert abs(_gaps(model, 0.0, q0, v0)[1][lower]) <= 1e-12
+    assert abs(contact_gaps(model, 0.0, q0, v0)[1][lower]) <= 1e-12
     traj = gp.simulate(model, q0, v0, 0.5, rtol=1e-12, atol=1e-14, max_events=200)
     assert traj.success and len(traj.events) < 200 and traj.events[0]["t"] > 1e-3  # leaves, comes back later
-    gaps = np.array([_gaps(model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
+    gaps = np.array([contact_gaps(model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
     assert gaps.min() >= -1e-12  # a corner resting while the block turns drifts by the tolerance (2e-11 at 1e-10)
 
 

@@ -12,7 +12,7 @@ import pytest
 import gausspp as gp
 from gausspp.simulation.progress import Progress
 
-simulate_module = importlib.import_module("gausspp.simulation.simulate")
+simulate_module = importlib.import_module("gausspp.simulation.inputs")  # the limits of a run
 
 
 def test_progress_line_states_the_fraction_and_the_time_left() -> None:

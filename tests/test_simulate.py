@@ -145,3 +145,47 @@ def test_compiled_lane_failure_keeps_prefix(solver: str) -> None:
         collapsing_model(), [0.0, 0.0], [1.0, 0.0], 2.0, dt=0.01, method="rk4-compiled", solver=solver, throw=False
     )
     assert traj.status == "failed" and 0.9 < traj.t[-1] < 1.0 and len(traj) > 10
+
+
+# -- the capability rules, declared once (gausspp.simulation.lanes) --------------------------------
+def test_lane_rules_answer_front_ends_as_simulate_does() -> None:
+    from gausspp.simulation import lanes
+
+    cvodes, compiled, rk4 = (gp.methods.get(m) for m in ("cvodes", "rk4-compiled", "rk4"))
+    assert not lanes.accepts(cvodes, "qp") and lanes.accepts(cvodes, "direct")
+    assert lanes.default_solver(cvodes) == "direct" and lanes.default_solver(rk4) == "qp"
+    assert lanes.accepts(compiled, "qp", "casadi:qrqp") and not lanes.accepts(compiled, "qp", "qpsolvers:osqp")
+    assert not lanes.accepts(rk4, "qp", kind="contacts") and lanes.accepts(
+        gp.methods.get("DOP853"), "qp", kind="contacts"
+    )
+    assert not lanes.accepts(compiled, "qp", kind="general") and not lanes.accepts(rk4, "direct", kind="general")
+    s = gp.scenes.get("two-masses")
+    with pytest.raises(gp.InputError, match=r"stabilize='project' is not supported by method='cvodes'"):
+        gp.simulate(s.model, s.q0, s.v0, 0.1, method="cvodes", solver="direct", stabilize="project")
+
+
+def test_simulation_writes_no_attribute_into_the_model() -> None:
+    """Compiled runs, projections, Jacobians, phase models and gap functions live in the model's workspace."""
+    s = gp.scenes.get("pendulum")
+    before = set(vars(s.model))
+    gp.simulate(s.model, s.q0, s.v0, 0.05, dt=0.01, method="rk4-compiled", stabilize="project")
+    gp.simulate(s.model, s.q0, s.v0, 0.05, method="Radau", solver="direct")
+    gp.simulate(s.model, s.q0, s.v0, 0.05, dt=0.01, stabilize="project")
+    assert set(vars(s.model)) == before and vars(s.model).get("_projection") is None
+    block = gp.scenes.get("block-on-floor")
+    before = set(vars(block.model))
+    gp.simulate(block.model, block.q0, block.v0, 0.5)
+    assert set(vars(block.model)) == before
+
+
+def test_trajectories_record_the_contact_gaps() -> None:
+    from gausspp.simulation.contacts import gaps
+
+    block = gp.scenes.get("block-on-floor")
+    traj = gp.simulate(block.model, block.q0, block.v0, 0.8)
+    assert traj.gap.shape == traj.contact_force.shape == (len(traj), len(block.model.contact_row_names))
+    expected = [gaps(block.model, t, q, v)[0] for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)]
+    np.testing.assert_array_equal(traj.gap, expected)
+    assert traj.gap.min() >= -1e-9 and np.any(traj.gap.min(axis=1) <= 1e-9)  # it lands
+    s = gp.scenes.get("two-masses")
+    assert gp.simulate(s.model, s.q0, s.v0, 0.1, dt=0.01).gap.shape == (11, 0)

@@ -14,13 +14,16 @@ import numpy as np
 
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError, RealizabilityError
 from ..model.model import Model
+from ..model.workspace import workspace
 from ..step import realizability
 from ..step.expressions import OUTPUTS, reduce
 from ..step.kernel import CompiledKernel
 from ..step.qp.casadi_conic import stdout_silenced
 from ..step.realizability import MARGIN_BOUND_ROWS
+from . import lanes
 from . import methods as _methods
 from .drift import Stabilization, projection_function
+from .rhs import RightHandSide
 
 #: CVODES gives up after this many internal steps (≈1 s on a small model) instead of stalling.
 MAX_CVODES_STEPS = 100_000
@@ -43,10 +46,7 @@ def rhs_function(model: Model, solver: str, backend: str | None) -> ca.Function:
     """
     kernel = model.kernel(solver, backend)
     if not isinstance(kernel, CompiledKernel):
-        raise InputError(
-            f"the compiled lane needs the step inside the casadi graph: use solver='direct' or a casadi QP "
-            f"backend (casadi:qrqp, casadi:daqp, casadi:osqp, ...), not {backend!r}"
-        )
+        raise InputError(lanes.graph_backend_error(lanes.LANES["compiled"], backend))
     nq, nv, nl = model.nq, model.nv, model.n_lam
     t, y, stab = ca.MX.sym("t"), ca.MX.sym("y", nq + nv + nl + 2), ca.MX.sym("stab", 2)
     args = [t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], stab]
@@ -62,7 +62,8 @@ def rhs_function(model: Model, solver: str, backend: str | None) -> ca.Function:
     return F.expand() if kernel.qp_parts is None else F
 
 
-def _rk_step(model: Model, F: ca.Function, tableau: _methods.Tableau, stab: Stabilization) -> ca.Function:
+def rk_step_function(model: Model, F: ca.Function, tableau: _methods.Tableau, stab: Stabilization) -> ca.Function:
+    """One explicit RK step of ``F`` as a casadi function ``(y, t, h, stab) -> (y', margin bound at the start)``."""
     nq, nv, nl = model.nq, model.nv, model.n_lam
     t, h, y, s = ca.MX.sym("t"), ca.MX.sym("h"), ca.MX.sym("y", F.size1_in(1)), ca.MX.sym("stab", 2)
     stages: list[ca.MX] = []
@@ -173,16 +174,17 @@ def integrate_compiled(
 def _compiled_run(
     model: Model, solver: str, backend: str | None, meth: _methods.Method, stab: Stabilization, n_steps: int
 ) -> tuple[ca.Function, ca.Function]:
-    """The step and the whole-run ``mapaccum`` function, built once per model and setting and kept."""
-    cache: dict[Any, Any] = model.__dict__.setdefault("_compiled_runs", {})
+    """The step and the whole-run ``mapaccum`` function, built once per model and setting and kept in the model's
+    workspace."""
     key = (solver, backend, meth.name, stab.project)
-    if key not in cache:
+
+    def build_step() -> ca.Function:
         assert meth.tableau is not None
-        cache[key] = (_rk_step(model, rhs_function(model, solver, backend), meth.tableau, stab), {})
-    step, runs = cache[key]
-    if n_steps not in runs:
-        runs[n_steps] = step.mapaccum("run", n_steps)
-    return step, runs[n_steps]
+        return rk_step_function(model, rhs_function(model, solver, backend), meth.tableau, stab)
+
+    step = workspace(model).get(("compiled-step", *key), build_step)
+    run = workspace(model).get(("compiled-run", *key, n_steps), lambda: step.mapaccum("run", n_steps))
+    return step, run
 
 
 def _step_by_step(
@@ -203,8 +205,6 @@ def _step_by_step(
 
 def _diagnose(model: Model, solver: str, backend: str | None, t: float, y: np.ndarray, t_next: float) -> Exception:
     """Name what failed in the step after the last good state ``y`` at ``t``."""
-    from .rhs import RightHandSide
-
     rhs = RightHandSide(model, solver, backend, Stabilization())
     try:
         rhs.evaluate(t, y)
@@ -242,10 +242,6 @@ def _cvodes(
     atol: float,
     record: Any,
 ) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int]:
-    if solver != "direct":
-        raise InputError("method='cvodes' needs solver='direct': CVODES differentiates the right-hand side")
-    if stab.project:
-        raise InputError("method='cvodes' cannot project between its internal steps; use stabilize='baumgarte'")
     if np.isscalar(record):
         grid = np.arange(t0, t_end, dt) if dt else np.linspace(t0, t_end, 201)
         grid = np.append(grid[grid < t_end], t_end)

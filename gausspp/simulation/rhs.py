@@ -11,6 +11,7 @@ import numpy as np
 from ..errors import NonFiniteError
 from ..model.model import Model
 from ..step import qp
+from ..step.general import check_backend
 from ..step.outcome import QP_TOLERANCE, Where, evaluation_failed, step_margin, to_result
 from .drift import Stabilization
 
@@ -80,8 +81,6 @@ class GeneralRightHandSide:
     kernel = None
 
     def __init__(self, model: Model, backend: str | None, stab: Stabilization, *, margin_checked: bool = True) -> None:
-        from ..step.general import check_backend
-
         self.model = model
         self.backend = check_backend(backend)
         self.solver = f"gauss-qp:{self.backend}"

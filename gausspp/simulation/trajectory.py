@@ -55,6 +55,9 @@ class Trajectory:
         contact row that approached (``speed_before`` → ``speed_after``, its ``impulse``) and the
         velocity ``jump`` it belongs to: rows hit at the same instant share one jump and so its
         ``kinetic_energy_before``/``_after`` (count a jump's energy loss once).
+    gap : (N, n_contact_rows) array
+        The gap ``g(q, t)`` of every unilateral contact row at each sample (≥ 0 up to the integration
+        tolerance; 0 while a contact is closed); empty second axis without contacts.
     """
 
     t: np.ndarray
@@ -81,6 +84,7 @@ class Trajectory:
     tracking_error: np.ndarray = field(default_factory=lambda: np.zeros(0))
     saturated: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=bool))
     events: tuple[dict[str, Any], ...] = ()
+    gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @property
     def success(self) -> bool:

@@ -1,0 +1,300 @@
+"""The event-driven lane: runs with unilateral contacts — flight, impacts, resting contact, lift-off.
+
+A run is a sequence of smooth *phases* (:mod:`gausspp.simulation.contacts`: in each, the active
+contacts are ideal bilateral constraints). A phase ends at the first event, located by the
+integrator's root finder on its dense output:
+
+* an open contact's gap ``g`` reaches zero from above → the contact closes; if it approaches,
+  the velocities jump by the velocity-level Gauss QP with Newton's restitution law
+  (:meth:`Model.impact`), and the impulse's work is added to the reaction's work so that
+  the energy balance still closes;
+* an active contact's force reaches zero from above → the contact lets go (lift-off).
+
+Active contacts are kept like any holonomic constraint, to the integration tolerance: a body
+rolling on a contact drifts into it by about ``rtol`` (2e-11 at ``rtol = 1e-10`` for a turning block).
+
+**Rest.** A ball with ``0 < e < 1`` bounces infinitely often in finite time (Zeno). When a
+contact would leave the impact slower than ``rest_speed`` the impact is taken as plastic
+(``e = 0``) and the contact rests from then on. Each impact is recorded twice (before and
+after the jump, same time) and listed in ``Trajectory.events``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import scipy.integrate as si
+
+from ..errors import GaussppError, InitialDataError, IntegrationError
+from ..model.model import Model
+from . import lanes, recording
+from . import methods as _methods
+from .contacts import active_set, gaps, off_the_start, phase_step
+from .drift import Stabilization, as_stabilization
+from .initial import check_on_constraint, initial_state
+from .inputs import Options, check_options
+from .rhs import RightHandSide
+from .samples import Samples
+from .trajectory import Trajectory
+
+#: Largest number of events (impacts, lift-offs) in one run before it is stopped as Zeno-like.
+MAX_EVENTS = 10_000
+
+
+def simulate_contacts(
+    model: Model,
+    q0: Any,
+    v0: Any,
+    t_end: float,
+    *,
+    t0: float = 0.0,
+    lam0: Any = None,
+    dt: float | None = None,
+    method: str | _methods.Method = "DOP853",
+    solver: str = "direct",
+    backend: str | None = None,
+    stabilize: Any = None,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    constraint_tol: float = 1e-8,
+    throw: bool = True,
+    rest_speed: float = 1e-6,
+    max_events: int = MAX_EVENTS,
+    record: Any = 1,
+) -> Trajectory:
+    """Integrate a model with unilateral contacts (see the module docstring); ``gp.simulate`` runs this lane.
+
+    Only adaptive scipy methods (RK45, DOP853, Radau, BDF) can locate events; ``dt`` caps their step.
+    ``record``: every accepted step (a number), or an array of times (from the dense output); the
+    states just before and after each impact are always recorded.
+    Phases with active contacts are solved by ``solver``; the decisions (active set, impacts) by the
+    general Gauss QP with ``backend`` when it names a qpsolvers solver.
+    """
+    opts = check_options(
+        model, method, t0, t_end, dt, solver, backend, rtol, atol, record, constraint_tol, throw, rest_speed, max_events
+    )
+    return run_contacts(model, q0, v0, lam0, stabilize, opts)
+
+
+def run_contacts(model: Model, q0: Any, v0: Any, lam0: Any, stabilize: Any, opts: Options) -> Trajectory:
+    """The event-driven lane from checked options: initial state, the phases, the recording."""
+    stab = as_stabilization(stabilize, opts.dt)
+    lanes.check_kind(opts.method, lanes.kind_of(model), opts.solver, stab.project)
+    q, v, lam = initial_state(model, opts.t0, q0, v0, lam0)
+    check_on_constraint(model, opts.t0, q, v, lam, opts.constraint_tol, hint="correct q0/v0")
+    g, _gdot = gaps(model, opts.t0, q, v)
+    if np.any(g < -model.contact_tol):
+        i = int(np.argmin(g))
+        raise InitialDataError(
+            f"initial data penetrate the contact {model.contact_row_names[i]!r} at t={opts.t0:.6g}: g = {g[i]:.3g} "
+            "< 0; start with every gap g ≥ 0"
+        )
+    samples = EventRun(model, opts, stab, np.concatenate([q, v, lam, [0.0, 0.0]])).samples()
+    return recording.finish(recording.record_contacts(model, samples), samples.failure, opts.throw)
+
+
+class EventRun:
+    """The state of an event-driven run: samples, phases, closed and departing contacts, events."""
+
+    def __init__(self, model: Model, opts: Options, stab: Stabilization, y0: np.ndarray) -> None:
+        self.model, self.opts, self.stab = model, opts, stab
+        self.decisions_backend = opts.backend
+        self.t, self.y = opts.t0, y0
+        self.ts: list[float] = [opts.t0]
+        self.ys: list[np.ndarray] = [y0.copy()]
+        self.sample_phase: list[int] = [0]
+        self.phases: list[tuple[int, ...]] = []
+        self.events: list[dict[str, Any]] = []
+        self.jumps: list[float] = []  # times of the velocity jumps (numbered from 1 in the events)
+        self.steps = self.evaluations = 0
+        g, _gdot = self.gaps(self.t, y0)
+        self.closed: set[int] = {int(i) for i in np.flatnonzero(g <= model.contact_tol)}
+        self.departing: set[int] = set()  # at g ≈ 0 and separating: watched on ġ until they turn round
+        record = opts.record
+        self.times = None if np.isscalar(record) else np.sort(np.asarray(record, float))
+
+    def gaps(self, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        nq, nv = self.model.nq, self.model.nv
+        return gaps(self.model, t, y[:nq], y[nq : nq + nv])
+
+    def keep(self, t: float, y: np.ndarray, phase: int) -> None:
+        self.ts.append(float(t))
+        self.ys.append(y.copy())
+        self.sample_phase.append(phase)
+
+    def samples(self) -> Samples:
+        """Run to ``t_end`` (or to a failure) and hand over what was computed."""
+        failure: Exception | None = None
+        try:
+            self.run()
+        except GaussppError as exc:
+            failure = exc
+        active_of = [self.phases[p] if p < len(self.phases) else () for p in self.sample_phase[: len(self.ts)]]
+        o = self.opts
+        y = np.array(self.ys)
+        return Samples(
+            np.array(self.ts),
+            y,
+            self.steps,
+            self.evaluations,
+            failure,
+            o.method.name,
+            o.solver,
+            active_of,
+            o.backend,
+            tuple(self.events),
+        )
+
+    def run(self) -> None:
+        model, opts = self.model, self.opts
+        g, gdot = self.gaps(self.t, self.y)
+        if np.any((g <= model.contact_tol) & (gdot < -model.contact_tol)):
+            self.y = self.impact(self.t, self.y)
+            self.keep(self.t, self.y, 0)
+        while self.t < opts.t_end:
+            fired = self.phase()
+            if fired is None:
+                break
+            self.on_event(*fired)
+            if len(self.events) > opts.max_events:
+                raise IntegrationError(
+                    f"more than {opts.max_events} contact events by t={self.t:.6g} (Zeno-like chattering): raise "
+                    "rest_speed so that slow impacts end in rest, or max_events (both arguments of gp.simulate)"
+                )
+
+    def phase(self) -> tuple[int, list[int], tuple[int, ...]] | None:
+        """Integrate one phase from ``(t, y)``; return the event that ended it (``None`` at ``t_end``)."""
+        model, opts, t, y = self.model, self.opts, self.t, self.y
+        nq, nv, nl = model.nq, model.nv, model.n_lam
+        active = active_set(
+            model, t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], self.decisions_backend, self.closed
+        )
+        released = self.closed - set(active)  # closed but pushing nothing: it separates (g̈ > 0) — watch it leave
+        self.closed -= released
+        gdot_start = self.gaps(t, y)[1]
+        # departing contacts that turned round (ġ ≤ 0, e.g. at the same instant as another's apex) watch g
+        self.departing = {i for i in self.departing if gdot_start[i] > 0} | released
+        sub, sub_solver, sub_backend = phase_step(model, active, opts.solver, opts.backend)
+        rhs = RightHandSide(sub, sub_solver, sub_backend, self.stab)
+        self.phases.append(active)
+        inactive = [i for i in range(len(model.contact_row_names)) if i not in active]
+        options: dict[str, Any] = {"rtol": opts.rtol, "atol": opts.atol}
+        if self.times is not None:
+            options["t_eval"] = self.times[(self.times > t) & (self.times <= opts.t_end)]
+        if opts.dt is not None:
+            options["max_step"] = opts.dt
+        events = self.event_functions(inactive, active, rhs)
+        try:
+            sol = si.solve_ivp(rhs, (t, opts.t_end), y, method=opts.method.name, events=events or None, **options)
+        finally:
+            self.evaluations += rhs.evaluations
+        return self.after_phase(sol, inactive, active)
+
+    def event_functions(
+        self, inactive: list[int], active: tuple[int, ...], rhs: RightHandSide
+    ) -> list[Callable[..., float]]:
+        """Closing of each inactive contact (its gap, or ġ while it separates), letting go of each active one."""
+        # a closed contact that separates is watched on ġ: it must turn round (ġ crosses zero) before it
+        # can close again, and one long step from g ≈ 0 to g < 0 would show no sign change of g
+        fns: list[Callable[..., float]] = []
+        for i in inactive:
+            which = 1 if i in self.departing or i in self.closed else 0
+
+            def closes(t_: float, y_: np.ndarray, i: int = i, which: int = which, t0_: float = self.t) -> float:
+                return off_the_start(float(self.gaps(t_, y_)[which][i]), t_, t0_)
+
+            closes.terminal, closes.direction = True, -1  # type: ignore[attr-defined]
+            fns.append(closes)
+        for pos, _i in enumerate(active):
+
+            def lets_go(t_: float, y_: np.ndarray, col: int = self.model.m + pos, t0_: float = self.t) -> float:
+                return off_the_start(float(rhs.evaluate(t_, y_)["u"][col]), t_, t0_)
+
+            lets_go.terminal, lets_go.direction = True, -1  # type: ignore[attr-defined]
+            fns.append(lets_go)
+        return fns
+
+    def after_phase(
+        self, sol: Any, inactive: list[int], active: tuple[int, ...]
+    ) -> tuple[int, list[int], tuple[int, ...]] | None:
+        """Keep the phase's samples; move to its end event (``None``: the phase reached ``t_end``)."""
+        sol_t = np.asarray(sol.t, float)
+        sol_y = np.asarray(sol.y, float).reshape(self.y.size, sol_t.size)
+        self.steps += max(sol_t.size - 1, 0)
+        first = 0 if self.times is not None else 1  # t_eval excludes the phase's start
+        phase = len(self.phases) - 1
+        for tk, yk in zip(sol_t[first:], sol_y.T[first:], strict=True):
+            self.keep(tk, yk, phase)
+        if sol.status == -1:
+            raise IntegrationError(f"{self.opts.method.name} stopped after t={self.t:.6g}: {sol.message}")
+        if sol.status == 0:
+            return None
+        t_e, j = min((float(te[0]), j) for j, te in enumerate(sol.t_events) if te.size)
+        y_e = sol.y_events[j][0].copy()
+        if not self.ts or self.ts[-1] != t_e:
+            self.keep(t_e, y_e, phase)
+        self.t, self.y = t_e, y_e
+        return j, inactive, active
+
+    def on_event(self, j: int, inactive: list[int], active: tuple[int, ...]) -> None:
+        """A separating contact turned round, a contact closes (touch or impact), or an active one lets go."""
+        model, t = self.model, self.t
+        if j < len(inactive) and (inactive[j] in self.departing or inactive[j] in self.closed):
+            self.departing.discard(inactive[j])  # a separating contact turned round (its apex): watch its gap now
+            self.closed.discard(inactive[j])
+        elif j < len(inactive):  # a contact closes (with any other that closes at the same instant)
+            i = inactive[j]
+            g_now, gd_now = self.gaps(t, self.y)
+            self.closed.add(i)
+            self.closed.update(
+                int(c) for c in np.flatnonzero((g_now <= model.contact_tol) & (gd_now <= model.contact_tol))
+            )
+            self.departing -= self.closed
+            if self.gaps(t, self.y)[1][i] < -model.contact_tol:
+                self.y = self.impact(t, self.y)
+                self.keep(t, self.y, len(self.phases))  # belongs to the next phase
+            else:
+                self.events.append({"t": t, "kind": "touch", "contact": model.contact_row_names[i]})
+        else:  # an active contact's force reaches zero
+            i = active[j - len(inactive)]
+            self.closed.discard(i)
+            self.departing.add(i)
+            self.events.append({"t": t, "kind": "lift-off", "contact": model.contact_row_names[i]})
+
+    def impact(self, t_e: float, y_e: np.ndarray) -> np.ndarray:
+        """The velocity jump at ``t_e`` (Newton's law, plastic below ``rest_speed``); lists the impacts."""
+        model = self.model
+        nq, nv, nl = model.nq, model.nv, model.n_lam
+        qe, ve, le = y_e[:nq], y_e[nq : nq + nv], y_e[nq + nv : nq + nv + nl]
+        _g, gd = gaps(model, t_e, qe, ve)
+        slow = np.flatnonzero(model.restitution * np.maximum(-gd, 0.0) < self.opts.rest_speed)
+        res = model.impact(t_e, qe, ve, le, backend=self.decisions_backend, plastic=slow, closed=sorted(self.closed))
+        after = gaps(model, t_e, qe, res.v_after)[1]
+        for i in res.closed:  # contacts that leave the impact separating are open again
+            if after[i] > model.contact_tol:
+                self.closed.discard(int(i))
+                self.departing.add(int(i))
+        y_new = y_e.copy()
+        y_new[nq : nq + nv] = res.v_after
+        y_new[nq + nv : nq + nv + nl] = res.lam_after
+        y_new[-2] += res.kinetic_energy_after - res.kinetic_energy_before  # the impulse's work
+        self.jumps.append(t_e)  # one velocity jump may close several contacts at once: they share its number
+        for i in res.closed:
+            if gd[i] < -model.contact_tol:  # an approaching contact (a resting one only takes part)
+                self.events.append(
+                    {
+                        "t": t_e,
+                        "kind": "impact",
+                        "jump": len(self.jumps),
+                        "contact": model.contact_row_names[i],
+                        "speed_before": float(gd[i]),
+                        "speed_after": float(after[i]),
+                        "impulse": float(res.impulse[i]),
+                        "kinetic_energy_before": res.kinetic_energy_before,
+                        "kinetic_energy_after": res.kinetic_energy_after,
+                        "plastic": bool(i in slow),
+                    }
+                )
+        return y_new

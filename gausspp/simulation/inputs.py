@@ -1,0 +1,142 @@
+"""The arguments of a run, checked once: :func:`check_options` returns them as :class:`Options`.
+
+Also the limits of a run's size (:data:`MAX_STEPS`, :data:`MAX_KEPT_BYTES`) and when a long run is
+announced (:data:`LONG_RUN_STEPS`) and reports its progress (:data:`PROGRESS_EVERY`).
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, LongRunWarning, ShapeError
+from ..model.model import Model
+from ..validation import array, number, positive
+from . import lanes
+from . import methods as _methods
+
+#: A run with more fixed steps than this warns up front (:class:`~gausspp.LongRunWarning`) with the count.
+LONG_RUN_STEPS = 1_000_000
+#: A long fixed-step run looks at the clock every this many steps (and reports at most every 2 s).
+PROGRESS_EVERY = 500
+#: A run with more steps than this is refused: it would run for days and its samples would not fit in memory.
+MAX_STEPS = 10**10
+#: The states a run keeps (every step on the compiled lane, the recorded ones elsewhere) may take this many bytes.
+MAX_KEPT_BYTES = 2**31
+
+
+@dataclass(frozen=True)
+class Options:
+    """The checked arguments of :func:`gausspp.simulate` (see there)."""
+
+    method: _methods.Method
+    t0: float
+    t_end: float
+    dt: float | None
+    solver: str
+    backend: str | None
+    rtol: float
+    atol: float
+    record: Any
+    constraint_tol: float
+    throw: bool
+    rest_speed: float
+    max_events: int
+
+
+def check_options(  # the arguments of gp.simulate, in its order
+    model: Model,
+    method: str | _methods.Method | None,
+    t0: Any,
+    t_end: Any,
+    dt: Any,
+    solver: str,
+    backend: str | None,
+    rtol: Any,
+    atol: Any,
+    record: Any,
+    constraint_tol: Any,
+    throw: Any,
+    rest_speed: Any,
+    max_events: Any,
+) -> Options:
+    """Every argument of a run that does not need the state, checked; the errors name the argument and the fix."""
+    if not isinstance(model, Model):
+        raise InputError(f"model must be a gp.Model (scenes carry one: gp.scenes.get(name).model), got {model!r}")
+    meth = _methods.get(lanes.default_method(model) if method is None else method)
+    t0 = number(f"t0 must be a finite number, got {t0!r}", t0)
+    t_end = number(f"t_end must be a finite number, got {t_end!r}", t_end)
+    if not t_end > t0:
+        raise InputError(f"need t0 < t_end, got t0={t0}, t_end={t_end}")
+    if dt is None and not meth.adaptive:
+        raise InputError(f"method {meth.name!r} has a fixed step: give dt > 0, e.g. dt={(t_end - t0) / 1000:.3g}")
+    if dt is not None:
+        dt = positive("dt", dt, hint=" (the step; for adaptive methods the first and largest)")
+    rtol = positive("rtol", rtol, hint=" (the relative tolerance of adaptive methods, e.g. rtol=1e-9)")
+    atol = positive("atol", atol, zero_ok=True, hint=" (the absolute tolerance of adaptive methods, e.g. atol=1e-12)")
+    constraint_tol = positive("constraint_tol", constraint_tol, zero_ok=True)
+    rest_speed = positive("rest_speed", rest_speed, zero_ok=True)
+    max_events = positive("max_events", max_events, integer=True)
+    if not isinstance(throw, (bool, np.bool_)):
+        raise InputError(f"throw must be True or False, got {throw!r}")
+    record = check_record(record, t0, t_end)
+    if dt is not None:
+        check_step_count(meth, model, t0, t_end, dt, record)
+    lanes.check_solver(meth, solver, backend)
+    return Options(
+        meth, t0, t_end, dt, solver, backend, rtol, atol, record, constraint_tol, bool(throw), rest_speed, max_events
+    )
+
+
+def check_record(record: Any, t0: float, t_end: float) -> Any:
+    """``record``: a positive integer (every ``record``-th step) or a 1-D array of times in ``[t0, t_end]``."""
+    if np.isscalar(record) or record is None:
+        return positive("record", record, integer=True, hint=" (record every k-th step) or an array of times")
+    times = array("simulate", "record", record)
+    if times.ndim != 1 or times.size == 0:
+        raise ShapeError(f"record must be a positive integer or a 1-D array of times, got shape {times.shape}")
+    if times.min() < t0 or times.max() > t_end:
+        raise InputError(
+            f"record times must lie within [t0, t_end] = [{t0:g}, {t_end:g}], got {times.min():g} … {times.max():g}"
+        )
+    return times
+
+
+def check_step_count(meth: _methods.Method, model: Model, t0: float, t_end: float, dt: float, record: Any) -> None:
+    """Refuse a run of more than :data:`MAX_STEPS` steps or whose kept states exceed :data:`MAX_KEPT_BYTES`; warn
+    (:class:`~gausspp.LongRunWarning`) above :data:`LONG_RUN_STEPS` steps, before the wait. For an adaptive method
+    ``dt`` is the largest step, so the count is a lower bound."""
+    steps = (t_end - t0) / dt  # a float: t_end=1e300 must not overflow an integer
+    bound = "at least " if meth.adaptive else ""
+    what = f"t_end - t0 = {t_end - t0:.6g} with dt={dt:.3g} is {bound}{steps:.3g} steps"
+    if steps > MAX_STEPS:
+        raise InputError(
+            f"{what}, more than the {MAX_STEPS:.0e} a run may take (days of computing): enlarge dt or shorten t_end"
+        )
+    width = 8 * (model.nq + model.nv + model.n_lam + 2)
+    every_step = lanes.keeps_every_step(meth)
+    if every_step:  # the compiled RK keeps every step's state
+        kept = steps + 1
+    elif np.isscalar(record):  # every record-th fixed step; every accepted step of an adaptive method
+        kept = steps + 1 if meth.adaptive else steps / float(record) + 2  # type: ignore[arg-type]
+    else:
+        kept = len(record)
+    if kept * width > MAX_KEPT_BYTES:
+        keep_less = "" if every_step else ", or record fewer steps (record=k keeps every k-th)"
+        raise InputError(
+            f"{what}; method {meth.name!r} would keep {kept:.3g} states ({kept * width / 2**30:.3g} GiB, more than "
+            f"{MAX_KEPT_BYTES / 2**30:g} GiB): enlarge dt or shorten t_end{keep_less}"
+        )
+    if steps > LONG_RUN_STEPS:
+        shown = lanes.progress_shown(meth)
+        warnings.warn(
+            f"{what} (method {meth.name!r}): this run will take long"
+            + (" (its progress and the time left are shown on standard error)" if shown else "")
+            + "; enlarge dt or shorten t_end"
+            + (", or use an adaptive or compiled method (DOP853, rk4-compiled)" if shown else ""),
+            LongRunWarning,
+            stacklevel=4,
+        )

@@ -1,0 +1,162 @@
+"""The Python and scipy lanes: the step as a right-hand side, stepped from Python or by scipy's ``OdeSolver``.
+
+Both hand back the accepted states (:class:`~gausspp.simulation.samples.Samples`); recording them is
+:mod:`gausspp.simulation.recording`'s job.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+import scipy.integrate as si
+
+from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError
+from ..model.model import Model
+from ..model.workspace import workspace
+from . import inputs
+from . import methods as _methods
+from .compiled import rhs_function
+from .drift import Stabilization
+from .initial import Projection, projection
+from .inputs import Options
+from .progress import Progress
+from .rhs import AnyRightHandSide
+from .samples import Samples
+
+
+def run_python(
+    rhs: AnyRightHandSide, model: Model, stab: Stabilization, opts: Options, y0: np.ndarray, redundant: bool
+) -> Samples:
+    """Fixed steps (RK tableau or symplectic Euler) from Python; keeps the recorded steps."""
+    meth, t0, t_end, dt = opts.method, opts.t0, opts.t_end, opts.dt
+    assert dt is not None  # checked for fixed-step methods
+    n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
+    keep = keep_indices(n_steps, t0, dt, opts.record)
+    ts, ys = np.empty(keep.size), np.empty((keep.size, y0.size))
+    project = projection(model, redundant) if stab.project else None
+    y, slot, t = y0.copy(), 0, t0
+    failure = None
+    progress = Progress(n_steps, f"gausspp.simulate ({meth.name})", enabled=n_steps > inputs.LONG_RUN_STEPS)
+    for i in range(n_steps + 1):
+        if i % inputs.PROGRESS_EVERY == 0:
+            progress.update(i)
+        if slot < keep.size and keep[slot] == i:
+            ts[slot], ys[slot] = t, y
+            slot += 1
+        if i == n_steps:
+            break
+        t_next = t0 + (i + 1) * dt if i + 1 < n_steps else t_end
+        try:
+            y = _one_step(meth, rhs, model, project, t, y, min(dt, t_end - t), t_next)
+            t = t_next
+        except GaussppError as exc:
+            failure = exc
+            break
+    progress.close()
+    return Samples(ts[:slot], ys[:slot], i, rhs.evaluations, failure, meth.name, rhs.solver)
+
+
+def _one_step(
+    meth: _methods.Method,
+    rhs: AnyRightHandSide,
+    model: Model,
+    project: Projection | None,
+    t: float,
+    y: np.ndarray,
+    h: float,
+    t_next: float,
+) -> np.ndarray:
+    """``y(t) → y(t + h)`` at ``t_next``, normalized (unit quaternions) and projected if asked."""
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    if meth.tableau is not None:
+        y = _methods.rk_step(meth.tableau, rhs, t, y, h)
+    else:  # symplectic Euler: v, λ and the works first, then q with the new v
+        y_new = y + h * rhs(t, y)
+        y_new[:nq] = y[:nq]
+        y_new[:nq] = y[:nq] + h * rhs.qdot(t, y_new)
+        y = y_new
+    y[:nq] = model.mechanism.normalize_array(y[:nq])
+    if project is not None:
+        y[:nq], y[nq : nq + nv] = project(t_next, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl])
+    if not np.isfinite(y.sum()):
+        raise NonFiniteError(f"the state became NaN or inf at t={t_next:.6g}; reduce dt or use a stiff method")
+    return y
+
+
+def keep_indices(n_steps: int, t0: float, dt: float, record: Any) -> np.ndarray:
+    """The step numbers to keep: every ``record``-th (and the last), or those at the ``record`` times."""
+    if np.isscalar(record):
+        every = int(record)  # type: ignore[arg-type]  # checked by check_record
+        idx = np.arange(0, n_steps + 1, every)
+        return idx if idx[-1] == n_steps else np.append(idx, n_steps)
+    times = np.asarray(record, float)
+    idx = np.rint((times - t0) / dt).astype(int)
+    if (
+        np.any(np.abs(t0 + idx * dt - times) > 1e-9 * max(1.0, abs(times).max()))
+        or np.any(idx < 0)
+        or np.any(idx > n_steps)
+    ):
+        raise InputError("record times must lie on the fixed-step grid t0 + i·dt within [t0, t_end]")
+    return np.unique(idx)
+
+
+def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
+    """A scipy ``OdeSolver`` stepped to ``t_end``; keeps every accepted step, or the ``record`` times."""
+    meth, t0 = opts.method, opts.t0
+    options: dict[str, Any] = {"rtol": opts.rtol, "atol": opts.atol}
+    if opts.dt is not None:
+        options.update(first_step=opts.dt, max_step=opts.dt)
+    if meth.name in ("Radau", "BDF"):  # implicit methods: the exact Jacobian from casadi where it exists
+        options["jac"] = jacobian(rhs)
+    solver = getattr(si, meth.name)(rhs, t0, y0, opts.t_end, **options)
+    times = None if np.isscalar(opts.record) else np.sort(np.asarray(opts.record, float))  # checked by check_record
+    keep_start = times is None or times[0] == t0
+    ts, ys = ([t0], [y0.copy()]) if keep_start else ([], [])
+    failure, steps, t_prev = None, 0, t0
+    while solver.status == "running":
+        try:
+            message = solver.step()
+        except GaussppError as exc:
+            failure = exc
+            break
+        if solver.status == "failed":
+            failure = IntegrationError(
+                f"{meth.name} stopped at t={solver.t:.6g}: {message}; near a singular or very stiff state — "
+                "check the realizability margin there, loosen rtol/atol, or try a stiff method"
+            )
+            break
+        steps += 1
+        if times is None:
+            ts.append(solver.t)
+            ys.append(solver.y.copy())
+        else:
+            dense = solver.dense_output()
+            for tk in times[(times > t_prev) & (times <= solver.t)]:
+                ts.append(float(tk))
+                ys.append(np.asarray(dense(tk)))
+        t_prev = solver.t
+    y = np.array(ys).reshape(len(ts), y0.size)
+    return Samples(np.array(ts), y, steps, rhs.evaluations, failure, meth.name, rhs.solver)
+
+
+def jacobian(rhs: AnyRightHandSide) -> Any:
+    """``∂F/∂y`` by casadi on the direct path (kept in the model's workspace); for a QP step, the structure only
+    (``None``: the works feed nothing back)."""
+    if rhs.solver != "direct":
+        return None
+    jac = workspace(rhs.model).get(("rhs-jacobian",), lambda: _jacobian_function(rhs.model))
+    stab = rhs.stab
+
+    def exact(t_: float, y_: np.ndarray) -> np.ndarray:
+        return np.array(jac(t_, y_, stab))
+
+    return exact
+
+
+def _jacobian_function(model: Model) -> ca.Function:
+    n = model.nq + model.nv + model.n_lam + 2
+    F = rhs_function(model, "direct", None)
+    t, y, s = ca.SX.sym("t"), ca.SX.sym("y", n), ca.SX.sym("stab", 2)
+    return ca.Function("rhs_jacobian", [t, y, s], [ca.jacobian(F(t, y, s), y)])
