@@ -296,6 +296,8 @@ def _demo_figures(out: Path) -> None:
         print(f"\n(no figures: {exc})")
         return
     from .simulation.simulate import simulate
+    from .studies.figures import skate_runs, three_realizations_runs
+    from .studies.realizability_map import realizability_grid
 
     out.mkdir(parents=True, exist_ok=True)
     runs = {}
@@ -306,9 +308,9 @@ def _demo_figures(out: Path) -> None:
         )
     figures = {
         "two_masses.png": lambda: plot.trajectory(runs, title="two masses: rod (ideal) vs follower force (servo)"),
-        "realizability_map.png": plot.realizability_map,
-        "three_realizations.png": plot.three_realizations,
-        "skate.png": plot.skate,
+        "realizability_map.png": lambda: plot.realizability_map(realizability_grid()),
+        "three_realizations.png": lambda: plot.three_realizations(runs=three_realizations_runs()),
+        "skate.png": lambda: plot.skate(runs=skate_runs()),
     }
     written = []
     for name, draw in figures.items():

@@ -6,8 +6,9 @@ n ⟂ l for a non-principal l" is checked on the numbers behind the map.
 
 from __future__ import annotations
 
+import ast
 from collections.abc import Iterator
-from dataclasses import replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -19,7 +20,11 @@ import gausspp as gp
 
 pytest.importorskip("matplotlib")
 from gausspp import plot  # noqa: E402
+from gausspp.studies.figures import skate_runs, three_realizations_runs  # noqa: E402
+from gausspp.studies.realizability_map import realizability_grid  # noqa: E402
 from gausspp.studies.report import Row  # noqa: E402
+
+PLOT_DIR = Path(plot.__file__).parent
 
 INERTIA = (1.0, 2.0, 3.0)
 SKEW_L = (1.0, 1.0, 1.0)
@@ -118,7 +123,7 @@ def test_reaction_over_time_flywheel_shows_the_state(tmp_path: Path) -> None:
 
 # -- the realizability map (the acceptance line) --------------------------------------------------------
 def test_map_true_zero_set_differs_from_the_naive_circle_for_a_skew_l() -> None:
-    g = plot.realizability_grid(INERTIA, SKEW_L, resolution=1.0)
+    g = realizability_grid(INERTIA, SKEW_L, resolution=1.0)
     top = g.margin.max()
     assert top > 0.99  # n ∥ I l is an ideal-like direction: margin 1
     assert not g.principal
@@ -140,7 +145,7 @@ def test_map_true_zero_set_differs_from_the_naive_circle_for_a_skew_l() -> None:
 
 def test_map_circles_coincide_for_a_principal_l() -> None:
     for l in [(0.0, 0.0, 1.0), (0.0, 2.0, 0.0)]:
-        g = plot.realizability_grid(INERTIA, l, resolution=2.0)
+        g = realizability_grid(INERTIA, l, resolution=2.0)
         assert g.principal
         assert abs(abs(g.pole @ g.l) - 1.0) < 1e-12
         assert g.true_margin.max() <= 1e-2 * g.margin.max()
@@ -151,7 +156,7 @@ def test_map_margin_is_the_library_margin(rng: np.random.Generator) -> None:
     """The vectorized margin behind the map equals gp.realizability.margin (A = I, J = lᵀ, D = n)."""
     I = np.array([[2.0, 0.3, -0.2], [0.3, 1.5, 0.1], [-0.2, 0.1, 1.0]])
     l = np.array([0.2, 1.0, -0.7])
-    g = plot.realizability_grid(I, l, resolution=5.0)
+    g = realizability_grid(I, l, resolution=5.0)
     for _ in range(20):
         i, j = rng.integers(g.lat.size), rng.integers(g.lon.size)
         n = g.n[i, j]
@@ -161,7 +166,7 @@ def test_map_margin_is_the_library_margin(rng: np.random.Generator) -> None:
 
 
 def test_realizability_map_figure(tmp_path: Path) -> None:
-    fig = plot.realizability_map(INERTIA, SKEW_L, resolution=2.0)
+    fig = plot.realizability_map(realizability_grid(INERTIA, SKEW_L, resolution=2.0))
     assert len(fig.axes) == 2  # the map and its colour bar
     ax = fig.axes[0]
     kinds = {type(c).__name__ for c in ax.collections}
@@ -172,22 +177,22 @@ def test_realizability_map_figure(tmp_path: Path) -> None:
     assert any("true zero set" in t for t in labels) and any("naive" in t for t in labels)
     assert "not zero" in ax.get_title()
     saved(fig, tmp_path / "map.png")
-    grid = plot.realizability_grid(INERTIA, (0, 0, 1), resolution=3.0)
+    grid = realizability_grid(INERTIA, (0, 0, 1), resolution=3.0)
     assert "principal" in plot.realizability_map(grid=grid).axes[0].get_title()
 
 
 def test_realizability_grid_bad_input() -> None:
     with pytest.raises(gp.InputError, match="positive definite"):
-        plot.realizability_grid((1.0, -2.0, 3.0), SKEW_L)
+        realizability_grid((1.0, -2.0, 3.0), SKEW_L)
     with pytest.raises(gp.ShapeError):
-        plot.realizability_grid(INERTIA, (1.0, 1.0))
+        realizability_grid(INERTIA, (1.0, 1.0))
     with pytest.raises(gp.InputError, match="resolution"):
-        plot.realizability_grid(INERTIA, SKEW_L, resolution=0.0)
+        realizability_grid(INERTIA, SKEW_L, resolution=0.0)
 
 
 # -- one constraint, three realizations; the skate --------------------------------------------------------
 def test_three_realizations(tmp_path: Path) -> None:
-    runs = plot.three_realizations_runs(t_end=4.0, samples=201)
+    runs = three_realizations_runs(t_end=4.0, samples=201)
     assert set(runs) == {"ideal", "force", "inertial"}
     l = np.ones(3) / np.sqrt(3.0)
     I = np.diag(INERTIA)
@@ -211,7 +216,7 @@ def test_three_realizations(tmp_path: Path) -> None:
 
 
 def test_skate(tmp_path: Path) -> None:
-    runs = plot.skate_runs(t_end=4.0, samples=201)
+    runs = skate_runs(t_end=4.0, samples=201)
     non, vak = runs["nonholonomic"], runs["vakonomic"]
     assert np.hypot(non.q[:, 0], non.q[:, 1] - 1.0).max() == pytest.approx(1.0, abs=1e-8)  # circle of radius v0/ω0
     assert np.abs(non.q[:, :2] - vak.q[:, :2]).max() > 0.5  # another law, another path
@@ -266,13 +271,31 @@ def markers(ax: Any, *gids: str) -> int:
     return sum(len(line.get_xdata()) for line in ax.get_lines() if line.get_gid() in gids)
 
 
+@dataclass(frozen=True)
+class WithGaps(gp.Trajectory):
+    """A run and its gaps ``(N, n_contact_rows)``, for runs made before simulate recorded ``traj.gap``."""
+
+    gap: np.ndarray | None = None
+
+
+def recorded(model: gp.Model, traj: gp.Trajectory) -> gp.Trajectory:
+    """``traj`` with its gaps ``traj.gap``: as recorded by simulate, else evaluated here from the model's
+    contact expressions (the test's own bridge; ``plot.contacts`` never evaluates the model)."""
+    if getattr(traj, "gap", None) is not None:
+        return traj
+    mech = model.mechanism
+    gaps = ca.Function("gaps", [mech.t, mech.q, mech.v], [model.contact_expressions[0]])
+    gap = np.array([np.array(gaps(t, q, v)).ravel() for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
+    return WithGaps(**{f.name: getattr(traj, f.name) for f in fields(traj)}, gap=gap.reshape(traj.t.size, -1))
+
+
 @pytest.fixture(scope="module")
 def rocking_block() -> tuple[gp.scenes.Scene, gp.Trajectory]:
     scene = gp.scenes.get("block-on-floor", tilt=0.3, e=0.5, drop=0.3, t_end=1.0)
     traj = gp.simulate(
         scene.model, scene.q0, scene.v0, 1.0, method="DOP853", rtol=1e-11, atol=1e-13, record=np.linspace(0, 1, 201)
     )
-    return scene, traj
+    return scene, recorded(scene.model, traj)
 
 
 def test_contacts_rocking_block(rocking_block: tuple[gp.scenes.Scene, gp.Trajectory], tmp_path: Path) -> None:
@@ -317,6 +340,7 @@ def test_contacts_lift_off_marked() -> None:
     )
     model = gp.Model(ball, [gp.Unilateral(lambda q, t: q[1], name="floor", restitution=0.5)])
     traj = gp.simulate(model, [0.0, 0.0], [0.0, 0.0], 2.0, rtol=1e-10, atol=1e-12, record=np.linspace(0, 2, 101))
+    traj = recorded(model, traj)
     kinds = [ev["kind"] for ev in traj.events]
     assert kinds[0] == "lift-off" and "impact" in kinds
     gap_ax, force_ax, _ = plot.contacts(model, traj).axes
@@ -336,3 +360,61 @@ def test_contacts_bad_input(two_masses: dict[str, Any], rocking_block: tuple[gp.
     )
     with pytest.raises(gp.InputError, match="traj.q has shape"):
         plot.contacts(ball, traj)  # the block's run is not the ball's
+
+
+def test_contacts_draws_the_recorded_gaps(rocking_block: tuple[gp.scenes.Scene, gp.Trajectory]) -> None:
+    """The gap panel holds ``traj.gap`` as recorded; without it, a clear error (the model is not evaluated)."""
+    scene, traj = rocking_block
+    gap_ax = plot.contacts(scene.model, traj).axes[0]
+    for i, name in enumerate(scene.model.contact_row_names):
+        line = next(line for line in gap_ax.get_lines() if line.get_label() == f"gap of {name}")
+        np.testing.assert_array_equal(line.get_ydata(), traj.gap[:, i])
+    no_gaps = type("OldRun", (), {f.name: getattr(traj, f.name) for f in fields(traj) if f.name != "gap"})()
+    with pytest.raises(gp.InputError, match=r"carries no gaps \(traj.gap.*re-run"):
+        plot.contacts(scene.model, no_gaps)
+    with pytest.raises(gp.ShapeError, match=r"traj.gap has shape \(\d+, 1\), expected"):
+        plot.contacts(scene.model, replace(traj, gap=traj.gap[:, :1]))
+
+
+# -- plot draws, the studies compute -------------------------------------------------------------------------
+@pytest.mark.parametrize("name", sorted(plot.MOVED))
+def test_moved_names_resolve_with_a_deprecation_warning(name: str) -> None:
+    """The studies that left plot are still reachable as ``plot.<name>``, warning where they live now."""
+    import importlib
+
+    home = importlib.import_module(plot.MOVED[name])
+    with pytest.warns(DeprecationWarning, match=rf"moved to {plot.MOVED[name]}\.{name}"):
+        assert getattr(plot, name) is getattr(home, name)
+    with pytest.raises(AttributeError, match="no attribute 'nonsense'"):
+        plot.nonsense  # noqa: B018
+
+
+def test_figures_need_their_results() -> None:
+    """A figure given no results says which study computes them, instead of computing them itself."""
+    with pytest.raises(gp.InputError, match=r"grid is missing.*realizability_grid"):
+        plot.realizability_map()
+    with pytest.raises(gp.InputError, match="grid must be the result of"):
+        plot.realizability_map(INERTIA)
+    with pytest.raises(gp.InputError, match=r"runs is missing.*three_realizations_runs"):
+        plot.three_realizations()
+    with pytest.raises(gp.InputError, match=r"runs is missing.*skate_runs"):
+        plot.skate()
+    with pytest.raises(gp.InputError, match="runs must be the mapping"):
+        plot.skate(runs=[1, 2])
+
+
+def test_plot_imports_no_computation() -> None:
+    """No module of gausspp.plot imports the model, the step, simulation, verification or the studies."""
+    forbidden = ("gausspp.model", "gausspp.step", "gausspp.simulation", "gausspp.verification", "gausspp.studies")
+    for path in sorted(PLOT_DIR.glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ImportFrom):
+                anchor = ["gausspp", "plot"][: 3 - node.level] if node.level else []
+                base = ".".join([*anchor, node.module] if node.module else anchor)
+                names = [base, *(f"{base}.{a.name}" for a in node.names)]
+            elif isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            else:
+                continue
+            bad = [n for n in names if n.startswith(forbidden)]
+            assert not bad, f"{path.name} imports {bad}"

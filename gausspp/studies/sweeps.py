@@ -324,7 +324,7 @@ def realizability_task(params: Mapping[str, Any]) -> dict[str, float]:
     ``inertia`` (default ``(1, 2, 3)``) and ``l`` (default ``(1, 1, 1)``).
     Returns ``{"margin": ...}``.
     """
-    from ..plot import servo_margin
+    from .realizability_map import servo_margin
 
     lon, lat = math.radians(float(params["lon"])), math.radians(float(params["lat"]))
     n = (math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat))

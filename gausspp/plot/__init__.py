@@ -1,0 +1,77 @@
+"""Figures (matplotlib, an optional extra: ``pip install gausspp[plots]``).
+
+Every function draws results it is given and returns a matplotlib :class:`~matplotlib.figure.Figure`;
+saving and showing it are the caller's choice. A non-interactive backend (Agg) is used when no display
+is available. matplotlib is imported only when a figure is drawn. The numbers behind the figures are
+computed by the studies: :mod:`gausspp.studies.realizability_map` (:func:`realizability_grid`,
+:func:`servo_margin`) and :mod:`gausspp.studies.figures` (:func:`three_realizations_runs`,
+:func:`skate_runs`); their former names here still resolve, with a ``DeprecationWarning`` (:data:`MOVED`).
+
+Figures (one module of this package each)
+-----------------------------------------
+trajectory          ``q(t)``, ``v(t)`` and optionally the phase portrait ``(qᵢ, vᵢ)``     (motion)
+reaction_over_time  ``u(t)`` (``λ`` or ``λ̇``), compulsion ``Z(t)`` and the realizability margin  (motion)
+contacts            recorded gaps ``g(t)``, contact forces and energy of a run with contacts  (impacts)
+realizability_map   the margin of a servo torque along ``n`` over the sphere of directions ``n``  (margin_map)
+three_realizations  one constraint ``(ω, l) = 0`` kept ideally, by a servo torque, by a flywheel  (realizations)
+skate               the nonholonomic and the vakonomic skate in the plane  (realizations)
+verification        the minimizing variation ``δx(t)`` of the integral principle (23)  (integral)
+work_precision      error against run time (the study of :mod:`gausspp.report`)  (runtime)
+"""
+
+from __future__ import annotations
+
+import importlib
+import warnings
+from typing import Any
+
+from .base import pyplot
+from .impacts import contacts
+from .integral import verification
+from .margin_map import realizability_map
+from .motion import reaction_over_time, trajectory
+from .realizations import THREE_LABELS, skate, three_realizations
+from .runtime import save_work_precision, work_precision
+
+#: Names that used to live here and are studies now: name → the module that holds it.
+MOVED = {
+    "realizability_grid": "gausspp.studies.realizability_map",
+    "servo_margin": "gausspp.studies.realizability_map",
+    "RealizabilityGrid": "gausspp.studies.realizability_map",
+    "three_realizations_runs": "gausspp.studies.figures",
+    "skate_runs": "gausspp.studies.figures",
+}
+
+#: The former private name of :func:`pyplot` (callers outside this package: use ``plot.pyplot``).
+_pyplot = pyplot
+
+__all__ = [
+    "THREE_LABELS",
+    "contacts",
+    "pyplot",
+    "reaction_over_time",
+    "realizability_map",
+    "save_work_precision",
+    "skate",
+    "three_realizations",
+    "trajectory",
+    "verification",
+    "work_precision",
+]
+
+
+def __getattr__(name: str) -> Any:
+    """A name in :data:`MOVED`, from its new module (PEP 562), with a ``DeprecationWarning``."""
+    home = MOVED.get(name)
+    if home is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    warnings.warn(
+        f"gausspp.plot.{name} is a study, not a figure: it moved to {home}.{name}; import it from there",
+        DeprecationWarning,
+        stacklevel=2,
+    )
+    return getattr(importlib.import_module(home), name)
+
+
+def __dir__() -> list[str]:
+    return sorted([*globals(), *MOVED])

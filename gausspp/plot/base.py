@@ -1,0 +1,78 @@
+"""What every figure shares: matplotlib on demand, runs given one or by label, labels, line styles, legends."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from ..errors import GaussppError, InputError, ShapeError
+
+#: Line styles that tell runs apart when several are drawn on one axes (colours tell components).
+STYLES = ("-", "--", ":", "-.")
+#: The models' default warning level of the realizability margin (``Model(margin_warn=...)``).
+MARGIN_WARN = 1e-6
+
+
+def pyplot() -> Any:
+    """``matplotlib.pyplot``, with the Agg backend when there is no display; a clear error without matplotlib."""
+    try:
+        import matplotlib
+    except ImportError:
+        raise GaussppError("plots need matplotlib: pip install 'gausspp[plots]'") from None
+    if not os.environ.get("DISPLAY") and "MPLBACKEND" not in os.environ:
+        matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def as_runs(obj: Any, what: str) -> dict[str, Any]:
+    """One object or a mapping ``label → object`` as a dict (label ``""`` for a lone object)."""
+    if isinstance(obj, Mapping):
+        if not obj:
+            raise InputError(f"nothing to plot: the mapping of {what} is empty")
+        return {str(k): v for k, v in obj.items()}
+    return {"": obj}
+
+
+def labels(given: Sequence[str] | None, n: int, symbol: str) -> list[str]:
+    """``n`` legend labels: the ``given`` ones (checked in number) or ``symbol₁ … symbolₙ``."""
+    if given is None:
+        return [f"${symbol}_{{{i + 1}}}$" for i in range(n)]
+    out = [str(s) for s in given]
+    if len(out) != n:
+        raise ShapeError(f"{symbol}_labels: {n} labels needed, got {len(out)}")
+    return out
+
+
+def suffix(name: str, traj: Any = None) -> str:
+    """`` (name, failed at t=…)`` for a legend entry; empty for an unnamed successful run."""
+    failed = traj is not None and getattr(traj, "status", "success") != "success"
+    tail = f"failed at t={traj.t[-1]:.3g}" if failed else ""
+    inner = ", ".join(s for s in (name, tail) if s)
+    return f" ({inner})" if inner else ""
+
+
+def legend(ax: Any) -> None:
+    """A legend sized to the number of labelled artists (none if there are none)."""
+    n = len(ax.get_legend_handles_labels()[1])
+    if n:
+        ax.legend(fontsize=8 if n <= 8 else 6, ncol=1 if n <= 6 else 2, loc="best")
+
+
+def vec(v: np.ndarray) -> str:
+    """A short vector for a title: ``(1, 0.5, 2)``."""
+    return "(" + ", ".join(f"{x:.3g}" for x in v) + ")"
+
+
+def given(value: Any, name: str, figure: str, study: str) -> Any:
+    """``value``, or a clear error if the caller left it out: figures draw results, they do not compute them."""
+    if value is None:
+        raise InputError(
+            f"plot.{figure}: {name} is missing — figures only draw results they are given; "
+            f"compute them with {study} and pass {name}=..."
+        )
+    return value

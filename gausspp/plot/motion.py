@@ -1,0 +1,145 @@
+"""Figures of one or several runs over time: coordinates and velocities, reactions, compulsion, margin."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, ShapeError
+from .base import MARGIN_WARN, STYLES, as_runs, labels, legend, pyplot, suffix
+
+
+def _same_sizes(runs: Mapping[str, Any], phase: bool) -> tuple[int, int]:
+    """``(nq, nv)`` shared by all runs; the phase portrait needs ``nq == nv``."""
+    first = next(iter(runs.values()))
+    nq, nv = first.q.shape[1], first.v.shape[1]
+    for name, tr in runs.items():
+        if tr.q.shape[1] != nq or tr.v.shape[1] != nv:
+            raise ShapeError(f"trajectory {name!r}: nq, nv = {tr.q.shape[1]}, {tr.v.shape[1]}; expected {nq}, {nv}")
+    if phase and nq != nv:
+        raise InputError(
+            f"phase=True draws v_i against q_i and needs nq == nv; these runs have nq={nq}, nv={nv} "
+            "(a rigid body: quaternion and ω) — draw them over time instead"
+        )
+    return nq, nv
+
+
+def trajectory(
+    traj: Any,
+    *,
+    phase: bool = False,
+    q_labels: Sequence[str] | None = None,
+    v_labels: Sequence[str] | None = None,
+    title: str | None = None,
+) -> Any:
+    """Coordinates and velocities over time, and optionally the phase portrait.
+
+    Draws ``q_i(t)`` and ``v_i(t)`` (``v = q̇``, or the quasi-velocities ``ω`` of a rigid body) in
+    two panels; with ``phase=True`` a third panel draws each pair ``(q_i(t), v_i(t))``, the
+    projection of the motion onto the phase plane of coordinate ``i``, with its start marked.
+
+    Parameters
+    ----------
+    traj : Trajectory or mapping of str to Trajectory
+        One run, or several (e.g. ``{"rod": a, "servo": b}``) drawn with one line style each;
+        components keep their colour across runs. All runs must have the same ``nq`` and ``nv``.
+    phase : bool
+        Add the phase portrait; needs ``nq == nv`` (not a rigid body's quaternion and ``ω``).
+    q_labels, v_labels : sequence of str, optional
+        Names of the components (default ``q₁…``, ``v₁…``).
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two axes (``q``, ``v``), three with ``phase``.
+    """
+    plt = pyplot()
+    runs = as_runs(traj, "trajectories")
+    nq, nv = _same_sizes(runs, phase)
+    ql, vl = labels(q_labels, nq, "q"), labels(v_labels, nv, "v")
+    ncols = 3 if phase else 2
+    fig, axes = plt.subplots(1, ncols, figsize=(4.8 * ncols, 4.0), layout="constrained")
+    colors = plt.get_cmap("tab10")
+    for r, (name, tr) in enumerate(runs.items()):
+        ls, sfx = STYLES[r % len(STYLES)], suffix(name, tr)
+        for i in range(nq):
+            axes[0].plot(tr.t, tr.q[:, i], ls, color=colors(i % 10), label=ql[i] + sfx)
+        for i in range(nv):
+            axes[1].plot(tr.t, tr.v[:, i], ls, color=colors(i % 10), label=vl[i] + sfx)
+        if phase:
+            for i in range(nq):
+                axes[2].plot(tr.q[:, i], tr.v[:, i], ls, color=colors(i % 10), label=f"({ql[i]}, {vl[i]}){sfx}")
+                axes[2].plot(tr.q[0, i], tr.v[0, i], "o", color=colors(i % 10), ms=4)
+    axes[0].set(xlabel="time t", ylabel="coordinates q", title="coordinates over time")
+    axes[1].set(xlabel="time t", ylabel="velocities v", title="velocities over time")
+    if phase:
+        axes[2].set(xlabel="coordinate $q_i$", ylabel="velocity $v_i$", title="phase portrait (start: dot)")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        legend(ax)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def _reaction_panels(axes: Any, runs: Mapping[str, Any], colors: Any) -> float:
+    """Draw ``u`` (and a flywheel's state ``λ``), ``Z`` and the margin of every run; the lowest margin shown."""
+    lowest = 1.0
+    for r, (name, tr) in enumerate(runs.items()):
+        ls, sfx = STYLES[r % len(STYLES)], suffix(name, tr)
+        for j in range(tr.u.shape[1]):
+            axes[0].plot(tr.t, tr.u[:, j], ls, color=colors(j % 10), label=f"$u_{{{j + 1}}}${sfx}")
+        for j in range(tr.lam.shape[1]):
+            state = f"state $\\lambda_{{{j + 1}}}${sfx}"
+            axes[0].plot(tr.t, tr.lam[:, j], ls, color=colors(j % 10), lw=0.8, alpha=0.5, label=state)
+        color = "k" if len(runs) == 1 else colors(r % 10)
+        axes[1].plot(tr.t, tr.compulsion, ls, color=color, label=f"Z{sfx}")
+        shown = np.maximum(np.asarray(tr.margin, float), 1e-17)
+        lowest = min(lowest, float(np.nanmin(shown)) if shown.size else 1.0)
+        axes[2].semilogy(tr.t, shown, ls, color=color, label=f"margin{sfx}")
+    return lowest
+
+
+def reaction_over_time(traj: Any, *, title: str | None = None) -> Any:
+    """The reaction's unknowns, Gauss's compulsion and the realizability margin over time.
+
+    Three panels sharing the time axis:
+
+    1. ``u(t)``, the step's unknowns in ``A ẍ + h = F + r₀ + D u``: ``λ`` for ideal and force
+       realizations (the reaction is ``Jᵀλ``, resp. ``Mᵀλ``, eqs. (4), (10)), ``λ̇`` for flywheel
+       realizations (eq. (15)), whose state ``λ(t)`` is drawn too (thin, translucent);
+    2. the compulsion ``Z = (A(ẍ − a₀), ẍ − a₀)``, ``a₀ = A⁻¹(F − h + r₀)`` the released
+       acceleration — what the reaction costs in Gauss's measure;
+    3. the realizability margin (log scale): the smallest singular value of ``S = J A⁻¹ D``
+       normalized in the metric ``A⁻¹``, 1 for ideal constraints, 0 where the realization cannot
+       keep the constraint (conditions (12), (16)); the dotted line is the default warning level.
+
+    Parameters
+    ----------
+    traj : Trajectory or mapping of str to Trajectory
+        One run or several, told apart by line style.
+    title : str, optional
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three axes: ``u``, ``Z``, margin.
+    """
+    plt = pyplot()
+    runs = as_runs(traj, "trajectories")
+    fig, axes = plt.subplots(3, 1, figsize=(8.0, 7.5), sharex=True, layout="constrained")
+    lowest = _reaction_panels(axes, runs, plt.get_cmap("tab10"))
+    axes[2].axhline(MARGIN_WARN, color="tab:red", ls=":", lw=1, label=f"default warning level {MARGIN_WARN:g}")
+    axes[2].set_ylim(min(lowest / 3, MARGIN_WARN / 10), 2.0)
+    axes[0].set(ylabel="u", title=r"reaction unknowns $u$: $\lambda$ (ideal, force) or $\dot\lambda$ (flywheel)")
+    axes[1].set(ylabel="Z", title=r"compulsion $Z = (A(\ddot x - a_0), \ddot x - a_0)$")
+    axes[2].set(xlabel="time t", ylabel="margin", title="realizability margin (0: the realization cannot act)")
+    for ax in axes:
+        ax.grid(True, which="both", alpha=0.3)
+        legend(ax)
+    if title:
+        fig.suptitle(title)
+    return fig
