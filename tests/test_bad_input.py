@@ -26,6 +26,7 @@ from hypothesis import strategies as st
 
 import gausspp as gp
 from gausspp import cli
+from gausspp.cli import console
 from gausspp.studies.sweeps import grid
 
 T_END, DT = 0.01, 0.005  # two RK4 steps: a valid run costs next to nothing
@@ -652,8 +653,8 @@ def test_states_that_do_not_fit_in_memory_are_refused() -> None:
 
 def test_the_command_line_shows_the_long_run_warning_at_once(monkeypatch: pytest.MonkeyPatch) -> None:
     shown: list[str] = []
-    monkeypatch.setattr(cli, "print", lambda *a, **k: shown.append(" ".join(map(str, a))), raising=False)
-    with cli._warnings_as_lines():
+    monkeypatch.setattr(console, "print", lambda *a, **k: shown.append(" ".join(map(str, a))), raising=False)
+    with console.warnings_as_lines():
         warnings.warn("many steps", gp.LongRunWarning, stacklevel=1)
         assert shown == ["gausspp: warning: LongRunWarning: many steps"]  # before the block ends
         warnings.warn("small margin", gp.RealizabilityWarning, stacklevel=1)

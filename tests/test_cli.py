@@ -12,6 +12,8 @@ import pytest
 
 import gausspp as gp
 from gausspp import cli
+from gausspp.cli import console, params
+from gausspp.studies import runs
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -230,28 +232,28 @@ def test_an_unforeseen_exception_is_still_one_line(
 
 # -- pieces -------------------------------------------------------------------------------------------
 def test_parameter_values_are_python_literals() -> None:
-    assert cli._parse_params("rigid-body-servo", ["n=(1, 0.2, 0)", "t_end=2", "l=1,1,0"]) == {
+    assert params.parse_params("rigid-body-servo", ["n=(1, 0.2, 0)", "t_end=2", "l=1,1,0"]) == {
         "n": (1, 0.2, 0),
         "t_end": 2.0,
         "l": (1, 1, 0),
     }
-    assert cli._parse_params("rigid-body-servo", ["n=None"]) == {"n": None}
-    assert cli._parse_params("crane", ["accel=None", "g=9"]) == {"accel": None, "g": 9.0}
-    assert cli._parse_params("two-masses", ["realization=servo"]) == {"realization": "servo"}
-    assert cli._parse_params("two-masses", ["realization='servo'"]) == {"realization": "servo"}
-    assert cli._parse_params("stiff-chain", ["n=5", "stiff=(1, 2)"]) == {"n": 5, "stiff": (1, 2)}
-    assert isinstance(cli._parse_params("stiff-chain", ["n=5.0"])["n"], int)
+    assert params.parse_params("rigid-body-servo", ["n=None"]) == {"n": None}
+    assert params.parse_params("crane", ["accel=None", "g=9"]) == {"accel": None, "g": 9.0}
+    assert params.parse_params("two-masses", ["realization=servo"]) == {"realization": "servo"}
+    assert params.parse_params("two-masses", ["realization='servo'"]) == {"realization": "servo"}
+    assert params.parse_params("stiff-chain", ["n=5", "stiff=(1, 2)"]) == {"n": 5, "stiff": (1, 2)}
+    assert isinstance(params.parse_params("stiff-chain", ["n=5.0"])["n"], int)
 
 
 def test_progress_on_a_non_terminal(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
-    monkeypatch.setattr(cli._Progress, "_LOG_AT", (0.05,))
-    with cli._Progress("working", delay=0.0):
+    monkeypatch.setattr(console.Progress, "_LOG_AT", (0.05,))
+    with console.Progress("working", delay=0.0):
         time.sleep(0.3)
     err = capsys.readouterr().err
     assert "gausspp: working … " in err and "gausspp: working: done in" in err
-    with cli._Progress("quick", delay=1.0):  # shorter than the delay: silent
+    with console.Progress("quick", delay=1.0):  # shorter than the delay: silent
         pass
-    with cli._Progress("muted", enabled=False, delay=0.0):
+    with console.Progress("muted", enabled=False, delay=0.0):
         time.sleep(0.1)
     assert capsys.readouterr().err == ""
 
@@ -261,7 +263,7 @@ def test_thin_drops_near_duplicate_nodes_and_keeps_the_end() -> None:
     traj = gp.simulate(scene.model, scene.q0, scene.v0, 1.0, method="DOP853", dt=1 / 400, rtol=1e-10, atol=1e-12)
     if np.diff(traj.t).min() > 1e-10:
         pytest.skip("this scipy does not end on a round-off step here")
-    thinned = cli._thin(traj, 0.05 / 400)  # scipy ended on a step of round-off size: that node goes
+    thinned = runs.thin(traj, 0.05 / 400)  # scipy ended on a step of round-off size: that node goes
     assert thinned.t[0] == 0.0 and thinned.t[-1] == 1.0 and np.diff(thinned.t).min() > 0.05 / 400
     assert thinned.t.size == traj.t.size - 1
     assert thinned.q.shape == (thinned.t.size, 2) and thinned.margin.size == thinned.t.size

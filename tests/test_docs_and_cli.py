@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from gausspp import cli
+from gausspp.studies import demo, tables
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -61,16 +62,18 @@ def test_demo_says_which_qp_backends_it_compared(
     """With daqp the general-QP table compares it with OSQP; without, it says so (not OSQP against itself)."""
     import qpsolvers
 
+    import gausspp.scenes
     import gausspp.step.general
 
     if first not in qpsolvers.available_solvers:
         pytest.skip(f"{first} is not installed")
-    names = cli.scenes.names
+    names = gausspp.scenes.names
     monkeypatch.setattr(
-        cli.scenes, "names", lambda kind="all": ["two-actuator-servo"] if kind == "general" else names(kind)
+        gausspp.scenes, "names", lambda kind="all": ["two-actuator-servo"] if kind == "general" else names(kind)
     )
     monkeypatch.setattr(gausspp.step.general, "default_backend", lambda: first)
-    cli._demo_general()
+    which = demo.backends()
+    print("\n".join(tables.general_lines(which, demo.general_rows(which))))
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.startswith("two-actuator-servo")).split()
     if first == "daqp":

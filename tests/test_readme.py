@@ -29,7 +29,7 @@ from pathlib import Path
 
 import pytest
 
-from gausspp import cli
+from gausspp.cli.parser import build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
@@ -204,7 +204,7 @@ def _check_command(text: str) -> None:
     words = [w for w in shlex.split(text, comments=True) if not w.startswith("[")]
     args = [PLACEHOLDERS.get(w, w) for w in words[1:]]
     try:
-        cli._parser().parse_args(args)
+        build_parser().parse_args(args)
     except SystemExit as exc:
         raise AssertionError(f"`{text}` is not a valid gausspp command line") from exc
 
@@ -263,7 +263,7 @@ def _commands(path: Path) -> list[str]:
 
 
 def _subcommands() -> dict[str, argparse.ArgumentParser]:
-    parser = cli._parser()
+    parser = build_parser()
     [action] = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
     return dict(action.choices)
 

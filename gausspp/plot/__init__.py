@@ -42,9 +42,6 @@ MOVED = {
     "skate_runs": "gausspp.studies.figures",
 }
 
-#: The former private name of :func:`pyplot` (callers outside this package: use ``plot.pyplot``).
-_pyplot = pyplot
-
 __all__ = [
     "THREE_LABELS",
     "contacts",

@@ -1,13 +1,10 @@
 """Error against run time (work-precision) and the QP error floor (issue 5; DiffEqDevTools-style).
 
-:func:`work_precision` runs, for each scene, each method over a sweep (fixed-step methods over
-``dt``, adaptive ones over ``rtol``) and each step solver, records the state at common sample
-times, and scores it against the scene's exact solution — or, where a scene has none, against
-a reference by a different method at a much finer setting (compiled RK4 with ≈1.6·10⁵ steps,
-cross-checked by DOP853 at ``rtol = 1e-13``; the row says which). Errors are mixed
-absolute/relative, ``max |x − x_ref| / max(1, |x_ref|)`` over ``q`` and ``v``, and are also
-given as significant correct digits ``−log₁₀`` (the Bari test set's scoring). Wall time is the
-minimum of several runs (these machines are shared and noisy). Failed runs stay in the table.
+:func:`work_precision` runs the study of :mod:`gausspp.studies.work_precision` in this process (for
+each scene, each method over a sweep of ``dt`` or ``rtol`` and each step solver, scored against the
+exact solution or a finer reference by another method); :func:`table`, :func:`summary_lines` and
+:func:`write` present its rows. Wall time is the minimum of several runs (these machines are shared
+and noisy). Failed runs stay in the table.
 
 :func:`qp_floor` measures each QP backend's step against the direct solution, and OSQP's floor
 against its tolerances with and without polishing.
@@ -17,10 +14,9 @@ from __future__ import annotations
 
 import csv
 import json
-import time
 import warnings
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -29,104 +25,34 @@ import numpy as np
 from .. import scenes
 from ..errors import GaussppError
 from ..model.model import Model
-from ..simulation import methods as _methods
 from ..simulation.simulate import simulate
 from ..step import qp
 from ..step.qp import CasadiConic
+from .work_precision import (
+    HORIZON,
+    STUDY_PARAMS,
+    Reference,
+    Row,
+    describe,
+    plan,
+    reference,
+    score,
+    work_precision_task,
+)
 
-#: Horizon cap (the long-horizon behaviour is the stability study's business).
-HORIZON = 1.0
-
-#: Scene parameters for the study where the defaults are too easy (a polynomial exact motion).
-STUDY_PARAMS: dict[str, dict[str, Any]] = {"two-masses": {"realization": "servo", "k": 3.0, "v": 0.5}}
-
-
-@dataclass(frozen=True)
-class Row:
-    """One run of the study."""
-
-    scene: str
-    method: str
-    solver: str
-    setting: str
-    final_error: float
-    max_error: float
-    digits: float
-    reference: str
-    constraint_residual: float
-    energy_error: float
-    wall_time: float
-    steps: int
-    rhs_evaluations: int
-    status: str
-    message: str
-
-
-@dataclass(frozen=True)
-class Reference:
-    """The states a run is scored against, at the common sample times."""
-
-    t: np.ndarray
-    x: np.ndarray
-    source: str
-
-
-def _mixed_error(x: np.ndarray, ref: np.ndarray) -> np.ndarray:
-    return np.max(np.abs(x - ref) / np.maximum(1.0, np.abs(ref)), axis=-1)
-
-
-def reference(scene: scenes.Scene, t: np.ndarray) -> Reference:
-    """The exact solution, or compiled RK4 with ≈1.6·10⁵ steps checked against DOP853 at rtol 1e-13."""
-    if scene.exact is not None:
-        return Reference(t, np.array([np.concatenate(scene.exact(ti)) for ti in t]), "exact")
-    T = float(t[-1])
-    steps = (t.size - 1) * 2**13  # ≈ 1.6·10⁵ steps, the samples on the grid
-    fine = simulate(
-        scene.model,
-        scene.q0,
-        scene.v0,
-        T,
-        lam0=scene.lam0,
-        method="rk4-compiled",
-        dt=T / steps,
-        solver="direct",
-        record=t,
-    )
-    check = simulate(
-        scene.model,
-        scene.q0,
-        scene.v0,
-        T,
-        lam0=scene.lam0,
-        method="DOP853",
-        rtol=1e-13,
-        atol=1e-15,
-        solver="direct",
-        record=t,
-    )
-    x = np.hstack([fine.q, fine.v])
-    spread = float(_mixed_error(np.hstack([check.q, check.v]), x).max())
-    return Reference(t, x, f"rk4-compiled {steps} steps (DOP853 1e-13 agrees to {spread:.0e})")
-
-
-def _settings(method: _methods.Method, T: float, samples: int, quick: bool) -> list[tuple[str, dict[str, Any]]]:
-    if method.adaptive:
-        tols = [1e-4, 1e-7, 1e-10, 1e-13] if quick else [1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12, 1e-13]
-        return [(f"rtol={r:g}", {"rtol": r, "atol": r * 1e-2}) for r in tols]
-    base = T / (samples - 1)  # dt divides the sampling interval, so the samples lie on the grid
-    factors = [4, 32, 256] if quick else [1, 4, 16, 64, 256, 1024]
-    if method.lane == "python":
-        factors = factors[:2]  # one Python call per stage: the fine end belongs to the compiled lane
-    return [(f"dt=T/{(samples - 1) * f}", {"dt": base / f}) for f in factors]
-
-
-def _best_of(repeats: int, run: Callable[[], Any]) -> tuple[float, Any]:
-    best, result = np.inf, None
-    for _ in range(repeats):
-        start = time.perf_counter()
-        result = run()
-        best = min(best, time.perf_counter() - start)
-    return best, result
+__all__ = [
+    "HORIZON",
+    "STUDY_PARAMS",
+    "Reference",
+    "Row",
+    "best_per_scene",
+    "qp_floor",
+    "reference",
+    "summary_lines",
+    "table",
+    "work_precision",
+    "write",
+]
 
 
 def work_precision(
@@ -139,95 +65,19 @@ def work_precision(
     samples: int = 21,
     progress: Callable[[str], None] | None = None,
 ) -> list[Row]:
-    """Run the study; see the module docstring. ``solvers`` are ``"direct"`` and QP backend names."""
-    names = list(scene_names or scenes.names("equality"))
-    meths = [_methods.get(m) for m in (method_names or ["rk4", "rk4-compiled", "DOP853", "Radau", "cvodes"])]
-    solver_list = list(solvers or ["direct", qp.DEFAULT, "casadi:osqp"])
-    rows: list[Row] = []
-    for name in names:
-        scene = scenes.get(name, **STUDY_PARAMS.get(name, {}))
-        T = min(scene.t_end, HORIZON)
-        t = np.linspace(0.0, T, samples)
-        ref = reference(scene, t)
-        for meth in meths:
-            for solver in solver_list:
-                if meth.name == "cvodes" and solver != "direct":
-                    continue  # CVODES differentiates the right-hand side: direct path only
-                if progress:
-                    progress(f"{name}: {meth.name} with {solver}")
-                for setting, opts in _settings(meth, T, samples, quick):
-                    rows.append(_one(scene, name, meth, solver, setting, opts, t, ref, repeats))
-    return rows
+    """Run the study in this process, one task after the other; see :mod:`gausspp.studies.work_precision`.
 
-
-def _one(
-    scene: scenes.Scene,
-    name: str,
-    meth: _methods.Method,
-    solver: str,
-    setting: str,
-    opts: dict[str, Any],
-    t: np.ndarray,
-    ref: Reference,
-    repeats: int,
-) -> Row:
-    kind: dict[str, Any] = {"solver": "direct"} if solver == "direct" else {"solver": "qp", "backend": solver}
-    nan = float("nan")
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            wall, traj = _best_of(
-                repeats,
-                lambda: simulate(
-                    scene.model,
-                    scene.q0,
-                    scene.v0,
-                    float(t[-1]),
-                    lam0=scene.lam0,
-                    method=meth.name,
-                    record=t,
-                    **kind,
-                    **opts,
-                ),
-            )
-    except GaussppError as exc:
-        return Row(
-            name,
-            meth.name,
-            solver,
-            setting,
-            nan,
-            nan,
-            nan,
-            ref.source,
-            nan,
-            nan,
-            nan,
-            0,
-            0,
-            "failed",
-            f"{type(exc).__name__}: {exc}",
-        )
-    err = _mixed_error(np.hstack([traj.q, traj.v]), ref.x)
-    final = float(err[-1])
-    energy = float(np.nanmax(np.abs(traj.energy_balance()))) if np.isfinite(traj.energy_balance()).any() else nan
-    return Row(
-        name,
-        meth.name,
-        traj.solver,
-        setting,
-        final,
-        float(err.max()),
-        float(-np.log10(max(final, 1e-17))),
-        ref.source,
-        traj.max_residual(),
-        energy,
-        wall,
-        traj.steps,
-        traj.rhs_evaluations,
-        traj.status,
-        traj.message,
-    )
+    ``solvers`` are ``"direct"`` and QP backend names; ``progress``, if given, is called with a line
+    naming each task before it runs. :func:`gausspp.sweeps.work_precision` runs the same tasks on
+    worker processes (the same rows; only the wall times differ).
+    """
+    params = plan(scene_names, method_names, solvers, quick, repeats, samples)
+    results = []
+    for p in params:
+        if progress is not None:
+            progress(describe(p))
+        results.append(work_precision_task(p))
+    return score(params, results, {})
 
 
 def table(rows: Sequence[Row]) -> str:
@@ -259,6 +109,19 @@ def best_per_scene(rows: Sequence[Row], target: float = 1e-10) -> dict[str, Row 
             if best is None or r.wall_time < best.wall_time:
                 out[r.scene] = r
     return out
+
+
+def summary_lines(rows: Sequence[Row], target: float = 1e-10) -> list[str]:
+    """The table, then the fastest run per scene reaching a final-state error of ``target``."""
+    lines = [table(rows), f"\nFastest run reaching a final-state error ≤ {target:g}, per scene:"]
+    for scene, row in best_per_scene(rows, target).items():
+        shown = (
+            "none"
+            if row is None
+            else f"{row.method} · {row.solver} · {row.setting}: {row.final_error:.1e} in {row.wall_time:.4f} s"
+        )
+        lines.append(f"  {scene:20s} {shown}")
+    return lines
 
 
 def write(rows: Sequence[Row], out: Path) -> list[Path]:

@@ -39,8 +39,8 @@ does not cost the good results around it. A task that raises is recorded with it
 others go on. With ``out="name.npz"`` the JSON-lines log is ``name.jsonl`` beside it and the finished sweep is also
 written as NPZ columns (:meth:`SweepResult.to_npz`; Parquet is not offered: it would need pyarrow).
 
-:func:`work_precision` runs the report's error-against-run-time study (:mod:`gausspp.report`) as a sweep
-(``gausspp sweep work-precision``).
+:func:`work_precision` runs the report's error-against-run-time study (:mod:`gausspp.studies.work_precision`)
+as a sweep (``gausspp sweep work-precision``).
 """
 
 from __future__ import annotations
@@ -59,14 +59,14 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, TextIO
+from typing import Any, TextIO
 
 import numpy as np
 
 from ..errors import GaussppError, InputError, SweepLogWarning, UnknownNameError
-
-if TYPE_CHECKING:
-    from .report import Row
+from .realizability_map import servo_margin
+from .scene_cache import cached_scene
+from .work_precision import Row, plan, score, work_precision_task
 
 __all__ = [
     "SceneTask",
@@ -287,45 +287,14 @@ class SweepResult:
         )
 
 
-# -- per-worker model cache ---------------------------------------------------------------------------
-def _freeze(value: Any) -> Any:
-    if isinstance(value, Mapping):
-        return tuple(sorted((k, _freeze(v)) for k, v in value.items()))
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return tuple(_freeze(v) for v in value)
-    return value
-
-
-def _thaw(value: Any) -> Any:
-    return list(value) if isinstance(value, tuple) else value
-
-
-@functools.lru_cache(maxsize=32)
-def _scene(name: str, frozen: tuple[tuple[str, Any], ...]) -> Any:
-    from .. import scenes
-
-    return scenes.get(name, **{k: _thaw(v) for k, v in frozen})
-
-
-def cached_scene(name: str, **params: Any) -> Any:
-    """``gausspp.scenes.get(name, **params)``, built once per process and reused (an LRU cache of 32).
-
-    Task functions call this instead of building the model themselves: a worker then compiles each
-    distinct model once, however many tasks it runs. Parameter lists are frozen into tuples for the cache.
-    """
-    return _scene(name, _freeze(params))
-
-
 # -- built-in tasks -----------------------------------------------------------------------------------
 def realizability_task(params: Mapping[str, Any]) -> dict[str, float]:
-    """The servo-torque realizability margin for one body axis ``n`` (see :func:`gausspp.plot.servo_margin`).
+    """The servo-torque realizability margin for one body axis ``n`` (see :func:`gausspp.studies.realizability_map.servo_margin`).
 
     Parameters (keys of ``params``): ``lon``, ``lat`` — the direction of ``n`` in degrees;
     ``inertia`` (default ``(1, 2, 3)``) and ``l`` (default ``(1, 1, 1)``).
     Returns ``{"margin": ...}``.
     """
-    from .realizability_map import servo_margin
-
     lon, lat = math.radians(float(params["lon"])), math.radians(float(params["lat"]))
     n = (math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat))
     margin = servo_margin(params.get("inertia", (1.0, 2.0, 3.0)), params.get("l", (1.0, 1.0, 1.0)), n)
@@ -616,6 +585,37 @@ def sweep(
     """
     start = time.perf_counter()
     task = _resolve_task(fn_or_scene)
+    plist = _param_list(params)
+    keys = [_canonical(p, f"params[{i}]") for i, p in enumerate(plist)]
+    executor = _checked_executor(executor, chunk, task)
+    path, npz = _paths(out)
+    name = _task_name(task)
+    results, errors, todo = _resume(path, keys, name, retry_failed)
+    sink = _open_log(path, name)
+    collect = _Collector(plist, results, errors, sink, _Progress(len(todo), sys.stderr if progress else None))
+    owned = executor is None and len(todo) > 0
+    pool: Executor | str | None = ProcessPoolExecutor(max_workers=os.cpu_count()) if owned else executor
+    try:
+        _run(task, plist, todo, pool, chunk, collect)
+    finally:
+        if owned and isinstance(pool, Executor):
+            pool.shutdown(wait=True, cancel_futures=True)
+        if sink is not None:
+            sink.close()
+    res = SweepResult(
+        params=plist,
+        results=results,
+        errors=dict(sorted(errors.items())),
+        wall_time=time.perf_counter() - start,
+        computed=len(todo),
+    )
+    if npz is not None:
+        res.to_npz(npz)
+    return res
+
+
+def _param_list(params: Any) -> list[dict[str, Any]]:
+    """``params`` as a list of parameter dicts (copies), or an InputError saying what it is instead."""
     if isinstance(params, (Mapping, str, bytes)) or not isinstance(params, Iterable):
         raise InputError(
             f"params must be a list of parameter dicts (e.g. grid(x=[1, 2])), got {type(params).__name__}"
@@ -626,7 +626,12 @@ def sweep(
         if not isinstance(p, Mapping):
             raise InputError(f"params[{i}] must be a dict of parameters, got {type(p).__name__} {p!r}")
         plist.append(dict(p))
-    keys = [_canonical(p, f"params[{i}]") for i, p in enumerate(plist)]
+    return plist
+
+
+def _checked_executor(executor: Any, chunk: int | None, task: Task) -> Executor | str | None:
+    """``executor`` checked (a dask Client becomes its executor), ``chunk`` checked, and ``task`` checked to
+    be picklable when it goes to worker processes."""
     if chunk is not None and (isinstance(chunk, bool) or not isinstance(chunk, int) or chunk < 1):
         raise InputError(f"chunk must be a positive integer, got {chunk!r}")
     if isinstance(executor, str) and executor != "serial":
@@ -648,11 +653,15 @@ def sweep(
                 "define it as a top-level function of a module (not a lambda or a nested function), "
                 "or use executor='serial'"
             ) from None
+    return executor  # type: ignore[no-any-return]
 
-    results: list[dict[str, Any] | None] = [None] * len(plist)
+
+def _resume(
+    path: Path | None, keys: list[str], name: str, retry_failed: bool
+) -> tuple[list[dict[str, Any] | None], dict[int, str], list[int]]:
+    """The results and errors already recorded in ``path`` (in task order), and the tasks still to run."""
+    results: list[dict[str, Any] | None] = [None] * len(keys)
     errors: dict[int, str] = {}
-    path, npz = _paths(out)
-    name = _task_name(task)
     recorded = _read_out(path, keys, name) if path is not None else {}
     for index, (result, error) in recorded.items():
         if error is not None and retry_failed:
@@ -660,254 +669,84 @@ def sweep(
         results[index] = result
         if error is not None:
             errors[index] = error
-    todo = [i for i in range(len(plist)) if i not in recorded or (retry_failed and recorded[i][1] is not None)]
+    todo = [i for i in range(len(keys)) if i not in recorded or (retry_failed and recorded[i][1] is not None)]
+    return results, errors, todo
 
-    sink: TextIO | None = None
-    if path is not None:
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            _cut_partial_line(path)  # a kill's partial last record must not swallow the next one
-            sink = path.open("a", encoding="utf-8")
-        except OSError as exc:
-            raise SweepError(f"cannot write out={str(path)!r}: {exc}") from None
-        if sink.tell() == 0:
-            sink.write(_canonical({"task": name}, "the task's name") + "\n")
-        sink.flush()
-    bar = _Progress(len(todo), sys.stderr if progress else None)
 
-    def collect(batch: list[tuple[int, str | None, str | None]]) -> None:
+def _open_log(path: Path | None, name: str) -> TextIO | None:
+    """The JSON-lines log opened for appending (its first line names the task), a partial last line cut off."""
+    if path is None:
+        return None
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _cut_partial_line(path)  # a kill's partial last record must not swallow the next one
+        sink = path.open("a", encoding="utf-8")
+    except OSError as exc:
+        raise SweepError(f"cannot write out={str(path)!r}: {exc}") from None
+    if sink.tell() == 0:
+        sink.write(_canonical({"task": name}, "the task's name") + "\n")
+    sink.flush()
+    return sink
+
+
+@dataclass
+class _Collector:
+    """Takes each finished chunk: into ``results`` and ``errors``, appended to the log, counted by the bar."""
+
+    plist: list[dict[str, Any]]
+    results: list[dict[str, Any] | None]
+    errors: dict[int, str]
+    sink: TextIO | None
+    bar: _Progress
+
+    def __call__(self, batch: list[tuple[int, str | None, str | None]]) -> None:
         for index, result_json, error in batch:
             result = json.loads(result_json) if result_json is not None else None
-            results[index] = result
+            self.results[index] = result
             if error is not None:
-                errors[index] = error
+                self.errors[index] = error
             else:
-                errors.pop(index, None)
-            if sink is not None:
-                record = {"index": index, "params": plist[index]}
+                self.errors.pop(index, None)
+            if self.sink is not None:
+                record = {"index": index, "params": self.plist[index]}
                 record.update({"error": error} if error is not None else {"result": result})
-                sink.write(_canonical(record, "record") + "\n")
-        if sink is not None:
-            sink.flush()  # in the OS's hands: survives a kill of this process
-        bar.update(len(batch), sum(e is not None for _, _, e in batch))
+                self.sink.write(_canonical(record, "record") + "\n")
+        if self.sink is not None:
+            self.sink.flush()  # in the OS's hands: survives a kill of this process
+        self.bar.update(len(batch), sum(e is not None for _, _, e in batch))
 
-    owned = executor is None and len(todo) > 0
-    pool: Executor | str | None = ProcessPoolExecutor(max_workers=os.cpu_count()) if owned else executor
+
+def _run(
+    task: Task,
+    plist: list[dict[str, Any]],
+    todo: list[int],
+    pool: Executor | str | None,
+    chunk: int | None,
+    collect: Callable[[list[tuple[int, str | None, str | None]]], None],
+) -> None:
+    """Run the tasks ``todo`` in chunks, here (``"serial"``) or on ``pool``, each chunk to ``collect``."""
+    if not todo:
+        return
+    if pool == "serial":
+        size = chunk or 1
+        for k in range(0, len(todo), size):
+            collect(_run_chunk(task, [(i, plist[i]) for i in todo[k : k + size]]))
+        return
+    assert isinstance(pool, Executor)
+    size = chunk or max(1, min(256, math.ceil(len(todo) / (4 * _workers(pool)))))
+    futures: list[Future[Any]] = [
+        pool.submit(_run_chunk, task, [(i, plist[i]) for i in todo[k : k + size]]) for k in range(0, len(todo), size)
+    ]
     try:
-        if not todo:
-            pass
-        elif pool == "serial":
-            size = chunk or 1
-            for k in range(0, len(todo), size):
-                collect(_run_chunk(task, [(i, plist[i]) for i in todo[k : k + size]]))
-        else:
-            assert isinstance(pool, Executor)
-            size = chunk or max(1, min(256, math.ceil(len(todo) / (4 * _workers(pool)))))
-            futures: list[Future[Any]] = [
-                pool.submit(_run_chunk, task, [(i, plist[i]) for i in todo[k : k + size]])
-                for k in range(0, len(todo), size)
-            ]
-            try:
-                for fut in as_completed(futures):
-                    collect(fut.result())
-            except BaseException:
-                for fut in futures:
-                    fut.cancel()
-                raise
-    finally:
-        if owned and isinstance(pool, Executor):
-            pool.shutdown(wait=True, cancel_futures=True)
-        if sink is not None:
-            sink.close()
-    res = SweepResult(
-        params=plist,
-        results=results,
-        errors=dict(sorted(errors.items())),
-        wall_time=time.perf_counter() - start,
-        computed=len(todo),
-    )
-    if npz is not None:
-        res.to_npz(npz)
-    return res
+        for fut in as_completed(futures):
+            collect(fut.result())
+    except BaseException:
+        for fut in futures:
+            fut.cancel()
+        raise
 
 
 # -- the work-precision study as a sweep ---------------------------------------------------------------
-def _study_scene(name: str) -> Any:
-    from .report import STUDY_PARAMS
-
-    return cached_scene(name, **STUDY_PARAMS.get(name, {}))
-
-
-def _study_times(scene: Any, samples: int) -> np.ndarray:
-    from .report import HORIZON
-
-    return np.linspace(0.0, min(scene.t_end, HORIZON), samples)
-
-
-def work_precision_task(params: Mapping[str, Any]) -> dict[str, Any]:
-    """One task of :func:`work_precision`: a scene's reference, or one run (method, solver, setting).
-
-    ``{"task": "reference", "scene", "samples"}`` returns the reference states ``x`` (``q`` then ``v``)
-    at the sample times and their ``source``; ``{"task": "run", "scene", "method", "solver", "setting",
-    "options", "samples", "repeats"}`` runs :func:`gausspp.simulate` as :func:`gausspp.report.work_precision`
-    does (the best wall time of ``repeats``) and returns the sampled states ``x`` with the run's figures
-    (``status``, ``message``, ``solver``, ``constraint_residual``, ``energy_error``, ``wall_time``,
-    ``steps``, ``rhs_evaluations``). The parent scores the runs against the reference.
-    """
-    from ..simulation.simulate import simulate
-    from . import report
-
-    scene = _study_scene(str(params["scene"]))
-    t = _study_times(scene, int(params["samples"]))
-    if params["task"] == "reference":
-        ref = report.reference(scene, t)
-        return {"x": ref.x.tolist(), "source": ref.source}
-    if params["task"] != "run":
-        raise InputError(f"work_precision_task: task={params['task']!r} is neither 'reference' nor 'run'")
-    solver = str(params["solver"])
-    kind: dict[str, Any] = {"solver": "direct"} if solver == "direct" else {"solver": "qp", "backend": solver}
-    opts = dict(params["options"])
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            wall, traj = report._best_of(
-                int(params["repeats"]),
-                lambda: simulate(
-                    scene.model,
-                    scene.q0,
-                    scene.v0,
-                    float(t[-1]),
-                    lam0=scene.lam0,
-                    method=str(params["method"]),
-                    record=t,
-                    **kind,
-                    **opts,
-                ),
-            )
-    except GaussppError as exc:
-        return {"status": "failed", "message": f"{type(exc).__name__}: {exc}"}
-    balance = traj.energy_balance()
-    energy = float(np.nanmax(np.abs(balance))) if np.isfinite(balance).any() else math.nan
-    return {
-        "x": np.hstack([traj.q, traj.v]).tolist(),
-        "solver": traj.solver,
-        "constraint_residual": float(traj.max_residual()),
-        "energy_error": energy,
-        "wall_time": float(wall),
-        "steps": int(traj.steps),
-        "rhs_evaluations": int(traj.rhs_evaluations),
-        "status": traj.status,
-        "message": traj.message,
-    }
-
-
-def _work_precision_params(
-    scene_names: Sequence[str] | None,
-    method_names: Sequence[str] | None,
-    solvers: Sequence[str] | None,
-    quick: bool,
-    repeats: int,
-    samples: int,
-) -> list[dict[str, Any]]:
-    from .. import scenes
-    from ..simulation import methods as _methods
-    from ..step import qp
-    from . import report
-
-    names = list(scene_names or scenes.names("equality"))  # as the report: the scenes with the direct formula
-    for name in names:
-        if name not in scenes.names():
-            raise UnknownNameError(f"scene {name!r} is unknown; available: {scenes.names()}")
-    meths = [_methods.get(m) for m in (method_names or ["rk4", "rk4-compiled", "DOP853", "Radau", "cvodes"])]
-    solver_list = list(solvers or ["direct", qp.DEFAULT, "casadi:osqp"])
-    for solver in solver_list:
-        if solver != "direct" and solver not in qp.names():
-            raise UnknownNameError(f"solver {solver!r} is unknown; use 'direct' or a QP backend: {qp.names()}")
-    if isinstance(repeats, bool) or not isinstance(repeats, int) or repeats < 1:
-        raise InputError(f"repeats must be a positive integer, got {repeats!r}")
-    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
-        raise InputError(f"samples must be an integer ≥ 2, got {samples!r}")
-    refs: list[dict[str, Any]] = [{"task": "reference", "scene": name, "samples": samples} for name in names]
-    runs: list[dict[str, Any]] = []
-    for name in names:
-        T = float(_study_times(_study_scene(name), samples)[-1])
-        for meth in meths:
-            for solver in solver_list:
-                if meth.name == "cvodes" and solver != "direct":
-                    continue  # CVODES differentiates the right-hand side: direct path only
-                for setting, opts in report._settings(meth, T, samples, quick):
-                    runs.append(
-                        {
-                            "task": "run",
-                            "scene": name,
-                            "method": meth.name,
-                            "solver": solver,
-                            "setting": setting,
-                            "options": opts,
-                            "samples": samples,
-                            "repeats": repeats,
-                        }
-                    )
-    return refs + runs  # the references first: the longest tasks start at once
-
-
-def _work_precision_rows(res: SweepResult) -> list[Row]:
-    from .report import Row, _mixed_error
-
-    nan = math.nan
-    refs: dict[str, tuple[np.ndarray | None, str]] = {}
-    for p, r, i in zip(res.params, res.results, range(len(res)), strict=True):
-        if p["task"] == "reference":
-            refs[p["scene"]] = (
-                (np.asarray(r["x"], dtype=float), str(r["source"]))
-                if r is not None
-                else (None, f"reference failed: {res.errors.get(i, '?')}")
-            )
-    rows: list[Row] = []
-    for p, r, i in zip(res.params, res.results, range(len(res)), strict=True):
-        if p["task"] != "run":
-            continue
-        ref_x, source = refs[p["scene"]]
-
-        def failed(message: str, p: dict[str, Any] = p, source: str = source) -> Row:
-            return Row(
-                p["scene"], p["method"], p["solver"], p["setting"], nan, nan, nan, source, nan, nan, nan, 0, 0,
-                "failed", message,
-            )  # fmt: skip
-
-        if r is None:  # the task raised something the study does not catch
-            rows.append(failed(f"task failed: {res.errors.get(i, '?')}"))
-        elif r["status"] == "failed" and "x" not in r:
-            rows.append(failed(str(r["message"])))
-        elif ref_x is None:
-            rows.append(failed(source))
-        elif np.shape(r["x"]) != ref_x.shape:
-            rows.append(failed(f"{r['status']}: {r['message']}"))
-        else:
-            err = _mixed_error(np.asarray(r["x"], dtype=float), ref_x)
-            final = float(err[-1])
-            rows.append(
-                Row(
-                    p["scene"],
-                    p["method"],
-                    str(r["solver"]),
-                    p["setting"],
-                    final,
-                    float(err.max()),
-                    float(-np.log10(max(final, 1e-17))),
-                    source,
-                    float(r["constraint_residual"]),
-                    float(r["energy_error"]),
-                    float(r["wall_time"]),
-                    int(r["steps"]),
-                    int(r["rhs_evaluations"]),
-                    str(r["status"]),
-                    str(r["message"]),
-                )
-            )
-    return rows
-
-
 def work_precision(
     scene_names: Sequence[str] | None = None,
     method_names: Sequence[str] | None = None,
@@ -927,6 +766,6 @@ def work_precision(
     sweep (``out`` is its resumable JSON-lines log; ``executor``, ``progress`` as in :func:`sweep`).
     Each scene's reference is computed once, by one task.
     """
-    params = _work_precision_params(scene_names, method_names, solvers, quick, repeats, samples)
+    params = plan(scene_names, method_names, solvers, quick, repeats, samples)
     res = sweep(work_precision_task, params, executor=executor, chunk=1, out=out, progress=progress)
-    return _work_precision_rows(res), res
+    return score(res.params, res.results, res.errors), res

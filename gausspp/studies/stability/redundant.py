@@ -13,22 +13,61 @@ dependent rows describe different constraints.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from typing import Any
 
-import casadi as ca
 import numpy as np
 
-from ... import scenes
 from ...errors import GaussppError, RealizabilityError
-from ...model.constraints import Constraint, Holonomic
-from ...model.mechanism import Lagrangian, MassMatrix
-from ...model.model import Model
 from ...simulation.simulate import simulate
 from ...step import qp
 from ...step.realizability import cosines
 from ...step.results import StepResult
-from ._case import Case, Solver, fmt, quiet_c_output, realizability_warnings, recorded, relative, solvers
+from ._case import Case, fmt, quiet_c_output, recorded, relative
+from .redundant_setups import (
+    CIRCLES,
+    DRIFTS,
+    EXACT_TOL,
+    OFF_FLOOR,
+    OFF_PER_DRIFT,
+    PINS,
+    QP_ADVICE,
+    SCAN_DRIFTS,
+    SIMULATE_TOL,
+    Findings,
+    Section,
+    attempt,
+    circle_state,
+    circle_twice,
+    clear_direct,
+    contradicting_models,
+    kind,
+    least_norm_multiplier,
+    off_tol,
+    pendulum_state,
+    pendulum_with_distance,
+    qp_ways,
+    refuses_redundancy,
+    two_masses,
+)
+
+__all__ = [
+    "EXACT_TOL",
+    "EXPECTED",
+    "NAME",
+    "OFF_FLOOR",
+    "OFF_PER_DRIFT",
+    "QP_ADVICE",
+    "SIMULATE_TOL",
+    "WHAT",
+    "case",
+    "circle_state",
+    "circle_twice",
+    "contradicting_models",
+    "least_norm_multiplier",
+    "pendulum_state",
+    "pendulum_with_distance",
+    "two_masses",
+]
 
 NAME = "redundant constraints"
 WHAT = (
@@ -50,155 +89,32 @@ EXPECTED = (
     "redundancy, solver='qp' follows the minimal model's run"
 )
 
-_PINS = ("pin-x", "pin-z", "distance")
-_CIRCLES = ("circle", "circle again")
-_DRIFTS = (1e-10, 1e-8, 1e-6, 1e-4, 1e-3, 1e-2)
-#: Acceleration and multiplier tolerance (relative) for exactly dependent, consistent rows.
-EXACT_TOL = 1e-10
-#: Off the manifold by δ the answer may differ from the minimal model's at the same state by ``OFF_FLOOR +
-#: OFF_PER_DRIFT·δ`` (relative): round-off, plus no more than the drift itself makes uncertain.
-OFF_FLOOR, OFF_PER_DRIFT = 1e-12, 2.0
-#: Largest relative difference of a simulated trajectory (solver='qp') from the minimal model's.
-SIMULATE_TOL = 1e-8
-#: Drifts of the scan over the angles (formerly the edge of the general QP's rank tolerance).
-_SCAN_DRIFTS = (1e-8, 2e-8, 3e-8)
-#: What solver='direct' adds to its error when the rows are redundant.
-QP_ADVICE = "solver='qp' returns the unique acceleration and the least-norm multiplier"
+
+def _duplicate_answers(
+    found: Findings, doubled: Any, q: np.ndarray, v: np.ndarray, ref: np.ndarray, derived: np.ndarray
+) -> tuple[dict[str, str], float, float, set[str], int]:
+    """Every QP backend on the circle written twice: what is wrong per backend, the worst acceleration and
+    multiplier errors, the routes that answered, and how many answers came with a RealizabilityWarning."""
+    bad: dict[str, str] = {}  # QP backend → what is wrong with its answer
+    err_a = err_u = 0.0
+    routes: set[str] = set()
+    warned_a = 0
+    for label, solver, backend in qp_ways():
+        out, warned = attempt(doubled, q, v, solver, backend)
+        found.judge(out, ref, EXACT_TOL, f"circle twice, {label}")
+        warned_a += warned
+        if not isinstance(out, StepResult):
+            bad[label] = f"{kind(out)}: {out}"
+            continue
+        routes.add(out.solver)
+        ea, eu = relative(out.a, ref), relative(out.u, derived)
+        err_a, err_u = max(err_a, ea), max(err_u, eu)
+        if ea > EXACT_TOL or eu > EXACT_TOL or not out.solver.startswith("gauss-qp:"):
+            bad[label] = f"answer by {out.solver}: acceleration {fmt(ea)}, multiplier {fmt(eu)} off"
+    return bad, err_a, err_u, routes, warned_a
 
 
-def circle_twice() -> tuple[Model, Model]:
-    """A particle on the unit circle under gravity: the minimal model, and the circle written twice."""
-    body = Lagrangian(n=2, T=lambda q, v, t: 0.5 * ca.sumsqr(v), V=lambda q, t: 9.81 * q[1])
-    circle = Holonomic(lambda q, t: ca.sumsqr(q) - 1.0, name="circle")
-    twice = Holonomic(lambda q, t: 2.0 * (ca.sumsqr(q) - 1.0), name="circle again")
-    return Model(body, [circle]), Model(body, [circle, twice])
-
-
-def circle_state() -> tuple[np.ndarray, np.ndarray]:
-    """The circle's test state: ``q = (cos 0.3, sin 0.3)``, ``v = 1.5·(−sin 0.3, cos 0.3)`` (on the circle)."""
-    return np.array([math.cos(0.3), math.sin(0.3)]), 1.5 * np.array([-math.sin(0.3), math.cos(0.3)])
-
-
-def pendulum_with_distance() -> tuple[scenes.Scene, Model]:
-    """The pendulum scene and the same body with its pins plus the distance constraint they imply."""
-    scene = scenes.get("pendulum")
-    L = float(scene.params["L"])
-    distance = Holonomic(lambda q, t: q[0] ** 2 + q[1] ** 2 - L**2, name="distance")
-    return scene, Model(scene.model.mechanism, [*scene.model.constraints, distance])
-
-
-def pendulum_state(phi: float, omega: float, stretch: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """``q = (cos φ·(1 + stretch), sin φ, φ)``, ``v = ω·(−sin φ, cos φ, 1)``: on the manifold iff ``stretch = 0``."""
-    c, s = math.cos(phi), math.sin(phi)
-    return np.array([c * (1.0 + stretch), s, phi]), np.array([-s * omega, c * omega, omega])
-
-
-def two_masses(constraints: list[Constraint]) -> Model:
-    """Two masses ``diag(1, 2)`` on a line, the second pulled by a unit force, with ``constraints``."""
-    body = MassMatrix(2, A=lambda q, t: np.diag([1.0, 2.0]), f=lambda q, v, t: ca.vertcat(0.0, 1.0))
-    return Model(body, constraints)
-
-
-def contradicting_models() -> dict[str, tuple[Model, np.ndarray, np.ndarray, float]]:
-    """Dependent rows that describe different constraints, each with a state ``(q, v, t)`` to step at.
-
-    ``speeds``: ``v₁ − v₀ = 0`` and ``v₁ − v₀ − t = 0`` (the same row, right-hand sides that disagree at the
-    acceleration level everywhere and at the velocity level for ``t ≠ 0``); ``positions``: ``x₀ = 0`` and
-    ``x₀ = 0.5`` (no state satisfies both; their velocity and acceleration rows agree).
-    """
-    speeds = two_masses(
-        [
-            Constraint(lambda q, v, t: v[1] - v[0], name="equal speeds"),
-            Constraint(lambda q, v, t: v[1] - v[0] - t, name="speeds apart"),
-        ]
-    )
-    positions = two_masses(
-        [Holonomic(lambda q, t: q[0], name="x at 0"), Holonomic(lambda q, t: q[0] - 0.5, name="x at 0.5")]
-    )
-    zero = np.zeros(2)
-    return {
-        "speeds at t = 0": (speeds, zero, zero, 0.0),
-        "speeds at t = 0.5": (speeds, zero, np.array([0.0, 0.5]), 0.5),
-        "positions at x = 0.25": (positions, np.array([0.25, 0.0]), zero, 0.0),
-        "positions at x = 0": (positions, zero, zero, 0.0),
-    }
-
-
-def least_norm_multiplier(model: Model, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
-    """The least-norm ``u`` with ``D u = A a − f − r₀`` (numpy's pseudo-inverse, singular values < 1e-10·max cut)."""
-    d = model.step_data(0.0, q, v)
-    return np.linalg.pinv(d.D, rcond=1e-10) @ (d.A @ a - d.f - d.r0)
-
-
-def _attempt(
-    model: Model, q: np.ndarray, v: np.ndarray, solver: str, backend: str | None, t: float = 0.0
-) -> tuple[Any, bool]:
-    """One step at ``t``: (the result or the exception, whether a RealizabilityWarning came with it)."""
-    with recorded() as caught, quiet_c_output():
-        try:
-            out: StepResult | Exception = model.step(t, q, v, solver=solver, backend=backend)
-        except Exception as exc:  # noqa: BLE001 - judged by the caller; a non-project exception is a finding
-            out = exc
-    return out, bool(realizability_warnings(caught))
-
-
-def _clear(out: Any, names: tuple[str, ...]) -> bool:
-    """A RealizabilityError that names every constraint and says they are redundant."""
-    return isinstance(out, RealizabilityError) and "redundant" in str(out) and all(repr(n) in str(out) for n in names)
-
-
-def _clear_direct(out: Any, names: tuple[str, ...]) -> bool:
-    """The direct formula's error: clear (:func:`_clear`), and pointing to solver='qp'."""
-    return _clear(out, names) and QP_ADVICE in str(out)
-
-
-def _refuses_redundancy(out: Any) -> bool:
-    """The direct formula's refusal, whether or not its message names the constraints."""
-    return isinstance(out, RealizabilityError) and "redundant" in str(out) and QP_ADVICE in str(out)
-
-
-def _kind(out: Any) -> str:
-    return "answer" if isinstance(out, StepResult) else type(out).__name__
-
-
-@dataclass
-class _Section:
-    """What one part of the study measured, saw and found wrong."""
-
-    figures: dict[str, float] = field(default_factory=dict)
-    observed: str = ""
-    problems: list[str] = field(default_factory=list)
-
-
-@dataclass
-class _Findings:
-    """Outcomes every section reports into: wrong answers and exceptions that are not the project's."""
-
-    wrong_answers: list[str] = field(default_factory=list)
-    non_project: list[str] = field(default_factory=list)
-
-    def judge(self, out: Any, ref: np.ndarray, tol: float, where: str) -> float | None:
-        """An answer's relative error against ``ref`` (recorded as wrong above ``tol``); ``None`` for an error."""
-        if isinstance(out, StepResult):
-            err = relative(out.a, ref)
-            if err > tol:
-                self.wrong_answers.append(f"{where}: error {fmt(err)} > {fmt(tol)}, margin {out.margin:.2g}")
-            return err
-        if not isinstance(out, GaussppError):
-            self.non_project.append(f"{where}: {type(out).__name__}: {out}")
-        return None
-
-
-def _qp_ways() -> list[Solver]:
-    """Every QP backend installed here (the compiled ones and qpsolvers')."""
-    return solvers(qp.names())[1:]
-
-
-def _off_tol(drift: float) -> float:
-    return OFF_FLOOR + OFF_PER_DRIFT * drift
-
-
-def _duplicates(found: _Findings) -> _Section:
+def _duplicates(found: Findings) -> Section:
     """A. The circle written twice (exactly dependent rows, everywhere): the direct formula and every QP backend."""
     minimal, doubled = circle_twice()
     q, v = circle_state()
@@ -208,26 +124,11 @@ def _duplicates(found: _Findings) -> _Section:
     derived = lam_min * np.array([1.0, 2.0]) / 5.0
     data = doubled.step_data(0.0, q, v)
     duplicate_cosines = cosines(data.A, data.J, data.D)
-    ways = _qp_ways()
-    direct_out, _ = _attempt(doubled, q, v, "direct", None)
+    ways = qp_ways()
+    direct_out, _ = attempt(doubled, q, v, "direct", None)
     found.judge(direct_out, ref, EXACT_TOL, "circle twice, direct")
-    bad: dict[str, str] = {}  # QP backend → what is wrong with its answer
-    err_a = err_u = 0.0
-    routes: set[str] = set()
-    warned_a = 0
-    for label, solver, backend in ways:
-        out, warned = _attempt(doubled, q, v, solver, backend)
-        found.judge(out, ref, EXACT_TOL, f"circle twice, {label}")
-        warned_a += warned
-        if not isinstance(out, StepResult):
-            bad[label] = f"{_kind(out)}: {out}"
-            continue
-        routes.add(out.solver)
-        ea, eu = relative(out.a, ref), relative(out.u, derived)
-        err_a, err_u = max(err_a, ea), max(err_u, eu)
-        if ea > EXACT_TOL or eu > EXACT_TOL or not out.solver.startswith("gauss-qp:"):
-            bad[label] = f"answer by {out.solver}: acceleration {fmt(ea)}, multiplier {fmt(eu)} off"
-    clear = _clear_direct(direct_out, _CIRCLES)
+    bad, err_a, err_u, routes, warned_a = _duplicate_answers(found, doubled, q, v, ref, derived)
+    clear = clear_direct(direct_out, CIRCLES)
     f = dict(
         duplicate_solvers=float(len(ways) + 1),
         duplicate_direct_clear_error=float(clear),
@@ -265,28 +166,28 @@ def _duplicates(found: _Findings) -> _Section:
             + ". Repro: `_, m = gausspp.studies.stability.redundant.circle_twice()`; q, v = "
             f"gausspp.studies.stability.redundant.circle_state(); m.step(0, q, v, backend='{next(iter(bad))}')."
         )
-    return _Section(f, observed, problems)
+    return Section(f, observed, problems)
 
 
-def _on_manifold(found: _Findings, quick: bool) -> _Section:
+def _on_manifold(found: Findings, quick: bool) -> Section:
     """B. Pins + distance along the manifold: dependent rows, in floating point only nearly so."""
     scene, with_distance = pendulum_with_distance()
     grid = np.linspace(-3.0, 3.0, 61 if quick else 241)
     every_backend_at = set(grid[:: 20 if quick else 40].tolist())
-    backends = [None, *(b for _, _, b in _qp_ways())]
+    backends = [None, *(b for _, _, b in qp_ways())]
     direct_clear = answers = default_answers = steps = backend_steps = 0
     max_err = max_u = 0.0
     unclear: list[str] = []
     for phi in grid:
         q, v = pendulum_state(float(phi), 1.3)
         ref = scene.model.step(0.0, q, v, solver="direct").a
-        out, _ = _attempt(with_distance, q, v, "direct", None)
+        out, _ = attempt(with_distance, q, v, "direct", None)
         found.judge(out, ref, EXACT_TOL, f"pins + distance on the manifold at φ = {phi:.2f}, direct")
-        direct_clear += _clear_direct(out, _PINS)
-        if not _clear_direct(out, _PINS):
-            unclear.append(f"φ = {phi:.2f}, direct: {_kind(out)}: {out}")
+        direct_clear += clear_direct(out, PINS)
+        if not clear_direct(out, PINS):
+            unclear.append(f"φ = {phi:.2f}, direct: {kind(out)}: {out}")
         for backend in backends if phi in every_backend_at else [None]:
-            out, _ = _attempt(with_distance, q, v, "qp", backend)
+            out, _ = attempt(with_distance, q, v, "qp", backend)
             label = qp.get(backend).name
             found.judge(out, ref, EXACT_TOL, f"pins + distance on the manifold at φ = {phi:.2f}, {label}")
             steps += 1
@@ -297,7 +198,7 @@ def _on_manifold(found: _Findings, quick: bool) -> _Section:
                 max_err = max(max_err, relative(out.a, ref))
                 max_u = max(max_u, relative(out.u, least_norm_multiplier(with_distance, q, v, ref)))
             else:
-                unclear.append(f"φ = {phi:.2f}, {label}: {_kind(out)}: {out}")
+                unclear.append(f"φ = {phi:.2f}, {label}: {kind(out)}: {out}")
     f = dict(
         manifold_states=float(grid.size),
         manifold_direct_clear_errors=float(direct_clear),
@@ -324,17 +225,17 @@ def _on_manifold(found: _Findings, quick: bool) -> _Section:
             f"nor in the minimal model's answer (QP), worst multiplier {fmt(max_u)} off the least-norm one: "
             + "; ".join(u[:300] for u in unclear[:3])
         )
-    return _Section(f, observed, problems)
+    return Section(f, observed, problems)
 
 
 def _off_manifold_states(quick: bool) -> list[tuple[float, float]]:
-    """``(φ, δ)``: φ = 0.7 and 0 at the drifts :data:`_DRIFTS`, then a scan of the angles at :data:`_SCAN_DRIFTS`."""
-    drifts = _DRIFTS if quick else tuple(float(d) for d in 10.0 ** np.arange(-12.0, -1.9, 0.5))
+    """``(φ, δ)``: φ = 0.7 and 0 at the drifts :data:`DRIFTS`, then a scan of the angles at :data:`SCAN_DRIFTS`."""
+    drifts = DRIFTS if quick else tuple(float(d) for d in 10.0 ** np.arange(-12.0, -1.9, 0.5))
     scan = np.linspace(-3.0, 3.0, 61 if quick else 241)[:: 5 if quick else 1]
-    return [(p, d) for p in (0.7, 0.0) for d in drifts] + [(float(p), d) for p in scan for d in _SCAN_DRIFTS]
+    return [(p, d) for p in (0.7, 0.0) for d in drifts] + [(float(p), d) for p in scan for d in SCAN_DRIFTS]
 
 
-def _off_manifold(found: _Findings, quick: bool) -> _Section:
+def _off_manifold(found: Findings, quick: bool) -> Section:
     """C. Pins + distance off the manifold by δ: every QP backend must give the minimal model's acceleration.
 
     At φ = 0.7 the distance row becomes independent of the pins (``J A⁻¹ Jᵀ`` nearly singular, margin ∝ δ²); at
@@ -342,7 +243,7 @@ def _off_manifold(found: _Findings, quick: bool) -> _Section:
     """
     scene, with_distance = pendulum_with_distance()
     states = _off_manifold_states(quick)
-    ways = _qp_ways()
+    ways = qp_ways()
     errors: dict[str, list[str]] = {}  # QP backend → its errors (consistent rows: each is a failure)
     direct_refusals = direct_named = answers = 0
     direct_other: list[str] = []
@@ -351,17 +252,17 @@ def _off_manifold(found: _Findings, quick: bool) -> _Section:
         q, v = pendulum_state(phi, 1.3, drift)
         ref = scene.model.step(0.0, q, v, solver="direct").a
         where = f"pins + distance {drift:.0e} off the manifold at φ = {phi:.2f}"
-        out, _ = _attempt(with_distance, q, v, "direct", None)
-        found.judge(out, ref, _off_tol(drift), f"{where}, direct")
-        direct_refusals += _refuses_redundancy(out)
-        direct_named += _clear_direct(out, _PINS)
-        if not _refuses_redundancy(out):
-            direct_other.append(f"{where}: {_kind(out)}: {out}")
+        out, _ = attempt(with_distance, q, v, "direct", None)
+        found.judge(out, ref, off_tol(drift), f"{where}, direct")
+        direct_refusals += refuses_redundancy(out)
+        direct_named += clear_direct(out, PINS)
+        if not refuses_redundancy(out):
+            direct_other.append(f"{where}: {kind(out)}: {out}")
         for label, solver, backend in ways:
-            out, _ = _attempt(with_distance, q, v, solver, backend)
-            err = found.judge(out, ref, _off_tol(drift), f"{where}, {label}")
+            out, _ = attempt(with_distance, q, v, solver, backend)
+            err = found.judge(out, ref, off_tol(drift), f"{where}, {label}")
             if err is None:
-                errors.setdefault(label, []).append(f"{where}: {_kind(out)}: {out}")
+                errors.setdefault(label, []).append(f"{where}: {kind(out)}: {out}")
                 continue
             answers += 1
             max_err, max_ratio = max(max_err, err), max(max_ratio, err / drift)
@@ -377,8 +278,8 @@ def _off_manifold(found: _Findings, quick: bool) -> _Section:
         off_manifold_direct_errors_naming_constraints=float(direct_named),
     )
     observed = (
-        f"Off the manifold ({len(states)} states: φ = 0.7 and 0 at δ = {_DRIFTS[0]:.0e}…{_DRIFTS[-1]:.0e}, and "
-        f"δ = {', '.join(f'{d:.0e}' for d in _SCAN_DRIFTS)} over the angles): the {len(ways)} QP backends answer "
+        f"Off the manifold ({len(states)} states: φ = 0.7 and 0 at δ = {DRIFTS[0]:.0e}…{DRIFTS[-1]:.0e}, and "
+        f"δ = {', '.join(f'{d:.0e}' for d in SCAN_DRIFTS)} over the angles): the {len(ways)} QP backends answer "
         f"{answers}/{steps} times, within {fmt(max_err)} of the minimal model at the same state (≤ {fmt(max_ratio)}·δ)"
         + (
             "; errors: " + "; ".join(f"{b}: {len(e)} (first: {e[0][:200]})" for b, e in errors.items())
@@ -388,6 +289,17 @@ def _off_manifold(found: _Findings, quick: bool) -> _Section:
         + f". Direct refuses the redundant rows {direct_refusals}/{len(states)} times, naming the constraints in "
         f"{direct_named}."
     )
+    return Section(f, observed, _off_manifold_problems(errors, direct_other, direct_named, direct_refusals, states))
+
+
+def _off_manifold_problems(
+    errors: dict[str, list[str]],
+    direct_other: list[str],
+    direct_named: int,
+    direct_refusals: int,
+    states: list[tuple[float, float]],
+) -> list[str]:
+    """What went wrong off the manifold: a QP backend raising, the direct formula not refusing or not naming."""
     problems = []
     if errors:
         problems.append(
@@ -402,22 +314,22 @@ def _off_manifold(found: _Findings, quick: bool) -> _Section:
     if direct_named < direct_refusals:
         problems.append(
             f"Off the manifold, {direct_refusals - direct_named} of solver='direct''s {direct_refusals} refusals do "
-            f"not name the constraints {', '.join(map(repr, _PINS))} in their message (the error's .constraint "
+            f"not name the constraints {', '.join(map(repr, PINS))} in their message (the error's .constraint "
             "does): Model.step's 'redundant on the constraint manifold' message. Repro: "
             "`_, m = gausspp.studies.stability.redundant.pendulum_with_distance()`; q, v = "
             "gausspp.studies.stability.redundant.pendulum_state(0.7, 1.3, 1e-3); m.step(0, q, v, solver='direct')."
         )
-    return _Section(f, observed, problems)
+    return problems
 
 
-def _contradictions(found: _Findings) -> _Section:
+def _contradictions(found: Findings) -> Section:
     """D. Dependent rows that contradict each other: the direct formula and every QP backend must raise."""
-    ways = [("direct", "direct", None), *_qp_ways()]
+    ways = [("direct", "direct", None), *qp_ways()]
     answered: list[str] = []
     raised = 0
     for name, (model, q, v, t) in contradicting_models().items():
         for label, solver, backend in ways:
-            out, _ = _attempt(model, q, v, solver, backend, t)
+            out, _ = attempt(model, q, v, solver, backend, t)
             if isinstance(out, RealizabilityError):
                 raised += 1
             elif isinstance(out, StepResult):
@@ -441,10 +353,10 @@ def _contradictions(found: _Findings) -> _Section:
             "(gauss_qp.solve_general). Repro: m = gausspp.studies.stability.redundant.contradicting_models()"
             "['positions at x = 0.25'][0]; m.step(0, [0.25, 0], [0, 0])."
         )
-    return _Section(f, observed + ".", problems)
+    return Section(f, observed + ".", problems)
 
 
-def _simulations(found: _Findings) -> _Section:
+def _simulations(found: Findings) -> Section:
     """E. simulate: solver='direct' must fail naming the redundancy; solver='qp' must follow the minimal model.
 
     ``rk4-compiled`` runs the compiled step, which has no general QP: with solver='qp' it must refuse, naming the
@@ -502,12 +414,12 @@ def _simulations(found: _Findings) -> _Section:
             "simulate with solver='qp' and redundant constraints does not follow the minimal model: "
             + "; ".join(f"{k}: {v}" for k, v in outcomes.items() if k.endswith("qp"))
         )
-    return _Section(f, observed, problems)
+    return Section(f, observed, problems)
 
 
 def case(quick: bool = True) -> Case:
     """Rank-deficient constraint Jacobians: what each solver and simulate do."""
-    found = _Findings()
+    found = Findings()
     sections = [
         _duplicates(found),
         _on_manifold(found, quick),

@@ -1,0 +1,7 @@
+"""``python -m gausspp.cli``: the ``gausspp`` command."""
+
+import sys
+
+from . import main
+
+sys.exit(main())

@@ -1,0 +1,288 @@
+"""The subcommands: each checks what argparse cannot, calls a study, prints its text; the exit code.
+
+A :class:`~gausspp.cli.console.UsageError` is a command line that cannot be meant (exit 2); a
+:class:`~gausspp.GaussppError` a value the library rejects or a run that failed (exit 1).
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import io
+import json
+import sys
+import time
+from collections.abc import Callable, Iterable
+from concurrent.futures import Executor, ProcessPoolExecutor
+from contextlib import redirect_stdout
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import plot, scenes
+from ..errors import GaussppError, UnknownNameError
+from ..scenes._scene import kinds as parameter_kinds
+from ..simulation import methods
+from ..simulation.trajectory import Trajectory
+from ..step import qp
+from ..studies import demo as demo_study
+from ..studies import output, runs, stability, sweeps, tables
+from ..studies import report as study
+from ..verification.verify import verify as check
+from .console import EXIT_OK, Progress, UsageError, warnings_as_lines
+from .params import build, parse_params
+
+
+def _print(lines: Iterable[str]) -> None:
+    for line in lines:
+        print(line)
+
+
+# -- demo ---------------------------------------------------------------------------------------------
+def demo(args: argparse.Namespace) -> int:
+    """Two masses, rod vs servo, and the rigid-body servo: QP vs direct, table and timings; every scene;
+    the general Gauss QP's scenes; the teaching figures."""
+    _print(tables.step_lines(demo_study.step_rows(), qp.DEFAULT))
+    _print(tables.scene_lines(demo_study.scene_rows(), qp.DEFAULT))
+    which = demo_study.backends()
+    _print(tables.general_lines(which, demo_study.general_rows(which)))
+    try:
+        written = demo_study.figures(Path(args.out))
+    except GaussppError as exc:  # matplotlib is an optional extra
+        print(f"\n(no figures: {exc})")
+        return EXIT_OK
+    print(f"\nfigures written: {', '.join(str(p) for p in written)}")
+    return EXIT_OK
+
+
+# -- report -------------------------------------------------------------------------------------------
+def _save_plots(rows: list[study.Row], out: Path) -> list[Path]:
+    try:
+        return plot.save_work_precision(rows, out)
+    except GaussppError as exc:  # matplotlib missing: the table and data are still written
+        print(f"(no plots: {exc})")
+        return []
+
+
+def _stability(args: argparse.Namespace, out: Path) -> int:
+    cases = stability.run(quick=not args.full)
+    print(stability.table(cases))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "stability.json").write_text(json.dumps(stability.to_records(cases), indent=1, default=str))
+    print(f"\nwritten: {out / 'stability.json'}")
+    return 0 if all(c.verdict for c in cases) else 1
+
+
+def report(args: argparse.Namespace) -> int:
+    """Work-precision study (or, with --stability, the stability study): table, CSV/JSON, plots."""
+    out = Path(args.out)
+    if args.stability:
+        return _stability(args, out)
+    start = time.perf_counter()
+    rows = study.work_precision(
+        args.scenes or None,
+        quick=not args.full,
+        repeats=args.repeats,
+        progress=(lambda m: print(f"  … {m}", file=sys.stderr)) if args.verbose else None,
+    )
+    _print(study.summary_lines(rows))
+    files = study.write(rows, out)
+    files += _save_plots(rows, out)
+    print(f"\n{len(rows)} runs in {time.perf_counter() - start:.1f} s; written: {', '.join(str(f) for f in files)}")
+    return 0
+
+
+# -- run, verify ----------------------------------------------------------------------------------------
+def _step_options(args: argparse.Namespace, scene: scenes.Scene, meth: methods.Method) -> dict[str, Any]:
+    """``solver``, ``backend`` and ``stabilize`` of :func:`gausspp.simulate` as the command line asks."""
+    solver, backend = getattr(args, "solver", None), getattr(args, "backend", None)
+    if solver is None:  # CVODES differentiates the right-hand side: the direct step only
+        solver = "direct" if meth.name == "cvodes" else "qp"
+    elif meth.name == "cvodes" and solver != "direct":
+        raise UsageError("--method cvodes needs --solver direct (CVODES differentiates the right-hand side)")
+    stabilize = getattr(args, "stabilize", None)
+    if stabilize is None:  # the scene's own drift control (a bounded servo's feedback), else none
+        stabilize = scene.params.get("stabilize", "none")
+    if backend is not None:
+        if solver == "direct":
+            raise UsageError("--backend applies to --solver qp only")
+        try:  # unknown or unavailable backends fail here, naming the valid ones (probing them prints banners)
+            with redirect_stdout(io.StringIO()):
+                qp.get(backend)
+        except UnknownNameError as exc:
+            raise UsageError(f"--backend {backend}: {exc}") from None
+    return dict(solver=solver, backend=backend, stabilize=None if stabilize == "none" else stabilize)
+
+
+def _simulate(
+    args: argparse.Namespace, scene: scenes.Scene, label: str, *, every_step: bool = False
+) -> tuple[Trajectory, float, float | None]:
+    """Simulate ``scene`` as the command line says (:func:`gausspp.studies.runs.simulate_scene`), with
+    progress and warnings on stderr: the trajectory, the wall time in s, the ``dt`` used."""
+    meth = methods.get(args.method)
+    t_end = scene.t_end if args.t_end is None else args.t_end
+    options = _step_options(args, scene, meth)
+    with Progress(label, enabled=not args.quiet), warnings_as_lines():
+        return runs.simulate_scene(
+            scene,
+            meth,
+            t_end,
+            dt=args.dt,
+            samples=args.samples,
+            every_step=every_step,
+            rtol=args.rtol,
+            atol=args.atol,
+            **options,
+        )
+
+
+def run(args: argparse.Namespace) -> int:
+    """Simulate one scene, print a summary, optionally write the trajectory (NPZ, CSV, PNG)."""
+    params = parse_params(args.scene, args.param)
+    scene = build(args.scene, params)
+    traj, wall, dt = _simulate(args, scene, f"simulating {args.scene}")
+    print(tables.label(scene.name, params))
+    _print(runs.summary_lines(scene, traj, wall, dt, args.rtol))
+    if args.out is not None:
+        files = output.write_trajectory(traj, scene, params, Path(args.out))
+        print(f"  {'written':15s} {', '.join(str(f) for f in files)}")
+    if not traj.success:
+        raise GaussppError(f"the run failed: {tables.one_line(traj.message)}")
+    return EXIT_OK
+
+
+def verify(args: argparse.Namespace) -> int:
+    """Simulate a scene, then decide by (23) whether the path is a motion of its model (or of another)."""
+    params = parse_params(args.scene, args.param)
+    check_params = parse_params(args.scene, args.check_param, "--check-param")
+    scene = build(args.scene, params)
+    model = build(args.scene, {**params, **check_params}).model if check_params else scene.model
+    traj, wall, dt = _simulate(args, scene, f"simulating {args.scene}", every_step=True)
+    t_end = scene.t_end if args.t_end is None else args.t_end
+    traj = runs.thin(traj, 0.05 * t_end / args.samples)
+    print(f"path:     {tables.label(scene.name, params)} — {tables.realizations(scene.model)}")
+    reached = f" to t = {traj.t[-1]:.6g}" if len(traj) else ""
+    print(f"          {traj.method} ({runs.setting(traj, dt, args.rtol)}), {len(traj)} samples{reached}, {wall:.3g} s")
+    if not traj.success:
+        raise GaussppError(f"the simulation failed, nothing to verify: {tables.one_line(traj.message)}")
+    target = tables.label(scene.name, {**params, **check_params}) if check_params else "the same model"
+    print(f"model:    {target} — {tables.realizations(model)}")
+    with Progress("verifying by (23)", enabled=not args.quiet), warnings_as_lines():
+        start = time.perf_counter()
+        result = check(model, traj)
+        wall = time.perf_counter() - start
+    _print(runs.verification_lines(result, wall))
+    verdict, reason = runs.verdict(result)
+    print(f"verdict:  {verdict} {reason}")
+    if args.expect is not None and (args.expect == "motion") != result.is_motion:
+        raise GaussppError(f"expected {args.expect.replace('-', ' ')}, but the verdict is: {verdict}")
+    return EXIT_OK
+
+
+# -- scenes ---------------------------------------------------------------------------------------------
+def list_scenes(args: argparse.Namespace) -> int:
+    """Every scene with a one-line description, or one scene's description and parameters."""
+    if args.name is None:
+        for name, line in scenes.describe().items():
+            print(f"{name:20s} {line}")
+        return EXIT_OK
+    builder = scenes._builder(args.name)
+    print(f"{args.name}: {inspect.getdoc(builder)}\n\nparameters (gausspp run {args.name} --param KEY=VALUE):")
+    for key, param in scenes.parameters(args.name).items():
+        ann = param.annotation
+        kind = ann if isinstance(ann, str) else " | ".join(sorted(parameter_kinds(param))) or "any"
+        print(f"  {key:16s} {kind:14s} default {param.default!r}")
+    return EXIT_OK
+
+
+# -- sweep ----------------------------------------------------------------------------------------------
+_SWEEP_ONLY = {
+    "realizability": ("resolution",),
+    "work-precision": ("scenes", "methods", "solvers", "full", "repeats"),
+}
+
+
+def sweep(args: argparse.Namespace) -> int:
+    """A parameter sweep on local worker processes, appended to --out as it runs (resumable)."""
+    for name, options in _SWEEP_ONLY.items():
+        for option in options:
+            if name != args.study and getattr(args, option) is not None:
+                raise UsageError(f"--{option} applies to `gausspp sweep {name}` only")
+    pool: Executor | None = ProcessPoolExecutor(args.workers) if args.workers > 1 else None
+    run_study: Callable[[argparse.Namespace, Any], int] = (
+        _sweep_realizability if args.study == "realizability" else _sweep_work_precision
+    )
+    try:
+        return run_study(args, pool or "serial")
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _workers_text(args: argparse.Namespace) -> str:
+    return f"{args.workers} worker{'s' if args.workers > 1 else ''}"
+
+
+def _sweep_realizability(args: argparse.Namespace, executor: Any) -> int:
+    step = 2.0 if args.resolution is None else args.resolution
+    if not (np.isfinite(step) and 0 < step <= 30):
+        raise UsageError(f"--resolution is a grid step in degrees, 0 < R ≤ 30; got {step}")
+    lon = np.linspace(-180.0, 180.0, int(round(360 / step)) + 1)
+    lat = np.linspace(-90.0, 90.0, int(round(180 / step)) + 1)
+    params = sweeps.grid(lat=[float(x) for x in lat], lon=[float(x) for x in lon])
+    res = sweeps.sweep(sweeps.realizability_task, params, executor=executor, out=args.out, progress=not args.quiet)
+    margin = res.column("margin")
+    k = int(np.nanargmin(margin)) if np.isfinite(margin).any() else 0
+    print(
+        f"realizability of a servo torque along n over the sphere, I = diag(1, 2, 3), l = (1, 1, 1)/√3, "
+        f"{step:g}° grid: {len(res)} directions"
+    )
+    print(
+        f"computed {res.computed} in {res.wall_time:.2f} s ({res.tasks_per_second:.0f} tasks/s, "
+        f"{_workers_text(args)}); failed: {len(res.errors)}"
+    )
+    print(
+        f"smallest margin {margin[k]:.3e} at lon {params[k]['lon']:g}°, lat {params[k]['lat']:g}°; "
+        f"largest {np.nanmax(margin):.3f}"
+    )
+    if args.out:
+        print(f"written: {args.out} (JSON lines; run again to resume)")
+    return 0 if res.ok else 1
+
+
+def _work_precision_out(args: argparse.Namespace) -> Path:
+    if args.solvers:
+        known = ["direct", *qp.names()]
+        for solver in args.solvers:
+            if solver not in known:
+                raise UsageError(f"--solvers: {solver!r} is unknown; use {', '.join(known)}")
+    out = Path(args.out or "report")
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out for work-precision is a directory; {str(out)!r} is a file")
+    return out
+
+
+def _sweep_work_precision(args: argparse.Namespace, executor: Any) -> int:
+    out = _work_precision_out(args)
+    log = out / "work_precision.jsonl"
+    rows, res = sweeps.work_precision(
+        args.scenes or None,
+        args.methods or None,
+        args.solvers or None,
+        quick=not args.full,
+        repeats=2 if args.repeats is None else args.repeats,
+        executor=executor,
+        out=log,
+        progress=not args.quiet,
+    )
+    _print(study.summary_lines(rows))
+    files = [log, *study.write(rows, out)]
+    files += _save_plots(rows, out)
+    print(
+        f"\n{len(rows)} runs; computed {res.computed} of {len(res)} tasks in {res.wall_time:.1f} s "
+        f"({_workers_text(args)}{'; wall times measured side by side in the workers' if args.workers > 1 else ''}); "
+        f"failed tasks: {len(res.errors)}"
+    )
+    print(f"written: {', '.join(str(f) for f in files)} (run again with the same --out to resume)")
+    return 0 if res.ok else 1

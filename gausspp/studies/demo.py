@@ -1,0 +1,259 @@
+"""The demo's content (``gausspp demo``): one step by both routes, every scene by both step solvers,
+the scenes only the general Gauss QP solves, and the teaching figures.
+
+Each study yields its rows one at a time (the command line prints each as soon as it is computed);
+:mod:`gausspp.studies.tables` turns them into text.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import plot, scenes
+from ..model.model import Model
+from ..simulation.simulate import simulate
+from ..simulation.trajectory import Trajectory
+from ..step import general as general_step
+from ..verification.crosscheck import crosscheck
+from ..verification.verify import verify
+from .figures import skate_runs, three_realizations_runs
+from .realizability_map import realizability_grid
+
+#: The one-step cases: the two masses with a rod and with a servo, the rigid body with Suslov's and a servo's axis.
+STEP_CASES: tuple[tuple[str, dict[str, Any]], ...] = (
+    ("two-masses", {"realization": "ideal"}),
+    ("two-masses", {"realization": "servo"}),
+    ("rigid-body-servo", {}),
+    ("rigid-body-servo", {"n": (1.0, 0.2, 0.0)}),
+)
+
+#: Steps of compiled RK4 per scene in the demo (stiff or fast scenes need more).
+STEPS = {"stiff-chain": 20_000, "andrews": 6_000}
+
+
+@dataclass(frozen=True)
+class StepRow:
+    """One route's raw step at t = 0 (no refinement), its gap to the direct one and to the reference, its cost."""
+
+    scene: str
+    label: str
+    solver: str
+    acceleration: np.ndarray
+    multiplier: float
+    gap: float | None  # QP vs direct (None on the direct row)
+    versus_reference: float
+    us_per_step: float
+
+
+@dataclass(frozen=True)
+class SceneRow:
+    """One scene by compiled RK4 with the direct step and with the QP, verified by (23)."""
+
+    scene: str
+    realizations: str
+    t_end: float
+    steps: int
+    gap: float
+    residual: float
+    energy_balance: float | None
+    relative_gap: float
+    is_motion: bool
+    run_ms: float
+
+
+@dataclass(frozen=True)
+class GeneralRow:
+    """One scene beyond the closed forms, by the general Gauss QP."""
+
+    scene: str
+    what: str
+    t_end: float
+    events: int
+    saturated: float | None
+    backend_gap: float | None
+    residual: float
+    energy_balance: float | None
+    exact_error: float | None
+    run_ms: float
+
+
+@dataclass(frozen=True)
+class Backends:
+    """The qpsolvers backends of the general-QP table: the default one, and a second to compare it with."""
+
+    first: str
+    second: str | None
+
+
+def time_per_step(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, solver: str) -> float:
+    """Minimum over repeats of the compiled kernel's time per step, in µs."""
+    kernel = model.kernel(solver)
+    kernel.inputs[0][0] = t
+    kernel.inputs[1][:], kernel.inputs[2][:], kernel.inputs[3][:] = q, v, lam
+    calls, best = 2000, np.inf
+    for _ in range(5):
+        start = time.perf_counter()
+        for _ in range(calls):
+            kernel.evaluate()
+        best = min(best, (time.perf_counter() - start) / calls)
+    return best * 1e6
+
+
+def _step_label(scene: scenes.Scene, params: dict[str, Any]) -> str:
+    return params.get("realization") or (
+        "Suslov (n = l)"
+        if scene.params.get("suslov")
+        else "servo n=(" + ", ".join(f"{x:.2f}" for x in scene.params["n"]) + ")"
+    )
+
+
+def step_rows() -> Iterator[StepRow]:
+    """Each case of :data:`STEP_CASES` by the direct formula and by the Gauss QP (raw answers), against the
+    independent acceleration-space QP (:func:`gausspp.crosscheck`), with the compiled time per step."""
+    for name, params in STEP_CASES:
+        scene = scenes.get(name, **params)
+        model = scene.model
+        lam = scene.lam0 if scene.lam0 is not None else np.zeros(0)
+        direct = model.step(0.0, scene.q0, scene.v0, solver="direct", refine=False)
+        gauss = model.step(0.0, scene.q0, scene.v0, solver="qp", refine=False)
+        check = crosscheck(model, 0.0, scene.q0, scene.v0, scene.lam0)
+        for res, solver in ((direct, "direct"), (gauss, "qp")):
+            yield StepRow(
+                scene=name,
+                label=_step_label(scene, params),
+                solver=solver,
+                acceleration=res.a,
+                multiplier=float(res.u[0]),
+                gap=None if solver == "direct" else gauss.disagreement(direct),
+                versus_reference=check.distances["direct" if solver == "direct" else "qp:default"],
+                us_per_step=time_per_step(model, 0.0, scene.q0, scene.v0, lam, solver),
+            )
+
+
+def _largest_energy_balance(traj: Trajectory) -> float | None:
+    """The largest ``|ΔE − W|`` along the run; ``None`` if the model does not know its energy."""
+    balance = np.abs(traj.energy_balance())
+    return float(np.nanmax(balance)) if np.isfinite(balance).any() else None
+
+
+def scene_rows() -> Iterator[SceneRow]:
+    """Every scene with the direct formula, by compiled RK4 with the direct step and with the QP (T ≤ 2),
+    the largest relative state difference along the run, and the direct run verified by (23)."""
+    for name in scenes.names("equality"):
+        scene = scenes.get(name)
+        T = min(scene.t_end, 2.0)
+        steps = STEPS.get(name, 2000)
+        kwargs: dict[str, Any] = dict(lam0=scene.lam0, method="rk4-compiled", dt=T / steps, record=max(steps // 400, 1))
+        start = time.perf_counter()
+        direct = simulate(scene.model, scene.q0, scene.v0, T, solver="direct", **kwargs)
+        run_ms = (time.perf_counter() - start) * 1e3
+        gauss = simulate(scene.model, scene.q0, scene.v0, T, solver="qp", **kwargs)
+        scale = max(1.0, float(np.abs(np.hstack([direct.q, direct.v])).max()))
+        check = verify(scene.model, direct)
+        yield SceneRow(
+            scene=name,
+            realizations=", ".join(dict.fromkeys(c.realization.label for c in scene.model.constraints)),
+            t_end=T,
+            steps=direct.steps,
+            gap=float(np.abs(np.hstack([gauss.q - direct.q, gauss.v - direct.v])).max()) / scale,
+            residual=direct.max_residual(),
+            energy_balance=_largest_energy_balance(direct),
+            relative_gap=check.relative_gap,
+            is_motion=check.is_motion,
+            run_ms=run_ms,
+        )
+
+
+def backends() -> Backends:
+    """The default qpsolvers backend (daqp when installed, else OSQP) and OSQP to compare it with, if it differs."""
+    first = general_step.default_backend()
+    return Backends(first, None if first == "osqp" else "osqp")
+
+
+def _features(model: Model, traj: Trajectory) -> str:
+    """What makes the scene need the general QP: contacts, bounds, extra actuators, redundant rows."""
+    redundant = traj.solver.startswith("gauss-qp") and not (model.bounded or model.contacts or model.m > model.k)
+    features = [
+        f"{len(model.contacts)} contact(s)" if model.contacts else "",
+        "bounded" if model.bounded else "",
+        f"{model.m} actuators, {model.k} row(s)" if model.m > model.k else "",
+        "redundant rows" if redundant else "",
+    ]
+    return ", ".join(f for f in features if f)
+
+
+def _on_grid_gap(run: Trajectory, other: Trajectory, grid: np.ndarray) -> float:
+    """Largest difference of ``q`` between two runs at the times of ``grid`` (the later sample of an impact)."""
+    on_grid = [np.flatnonzero(np.isin(tr.t, grid) & np.r_[np.diff(tr.t) > 0, True]) for tr in (run, other)]
+    return float(np.abs(run.q[on_grid[0]] - other.q[on_grid[1]]).max())
+
+
+def general_rows(which: Backends) -> Iterator[GeneralRow]:
+    """Every scene without a closed-form step, by DOP853 (rtol 1e-11) with the general Gauss QP on
+    ``which.first`` (and ``which.second`` for the gap between the two), recorded at 201 times (T ≤ 3)."""
+    for name in scenes.names("general"):
+        scene = scenes.get(name)
+        model = scene.model
+        T = min(scene.t_end, 3.0)
+        grid = np.linspace(0.0, T, 201)
+        kwargs: dict[str, Any] = dict(lam0=scene.lam0, method="DOP853", rtol=1e-11, atol=1e-13, record=grid)
+        if "stabilize" in scene.params:
+            kwargs["stabilize"] = scene.params["stabilize"]
+        elif model.bounded:
+            kwargs["stabilize"] = "baumgarte"
+        start = time.perf_counter()
+        run = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{which.first}", **kwargs)
+        run_ms = (time.perf_counter() - start) * 1e3
+        gap = None
+        if which.second:
+            other = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{which.second}", **kwargs)
+            gap = _on_grid_gap(run, other, grid)
+        exact = None
+        if scene.exact is not None:
+            exact = max(float(np.abs(scene.exact(t)[0] - q).max()) for t, q in zip(run.t, run.q, strict=True))
+        yield GeneralRow(
+            scene=name,
+            what=_features(model, run),
+            t_end=T,
+            events=len(run.events),
+            saturated=float(run.saturated.any(axis=1).mean()) if model.bounded else None,
+            backend_gap=gap,
+            residual=run.max_residual(),
+            energy_balance=_largest_energy_balance(run),
+            exact_error=exact,
+            run_ms=run_ms,
+        )
+
+
+def figures(out: Path) -> list[Path]:
+    """The teaching pictures in ``out``: rod vs servo, the realizability map, three realizations, the skate.
+
+    Raises :class:`~gausspp.GaussppError` without matplotlib (an optional extra), before anything runs.
+    """
+    plt = plot.pyplot()
+    out.mkdir(parents=True, exist_ok=True)
+    runs = {}
+    for realization in ("ideal", "servo"):
+        scene = scenes.get("two-masses", realization=realization, k=3.0, v=0.5)
+        runs[f"{'rod' if realization == 'ideal' else 'servo'}"] = simulate(
+            scene.model, scene.q0, scene.v0, 4.0, method="rk4-compiled", dt=1e-3, solver="direct", record=10
+        )
+    drawings = {
+        "two_masses.png": lambda: plot.trajectory(runs, title="two masses: rod (ideal) vs follower force (servo)"),
+        "realizability_map.png": lambda: plot.realizability_map(realizability_grid()),
+        "three_realizations.png": lambda: plot.three_realizations(runs=three_realizations_runs()),
+        "skate.png": lambda: plot.skate(runs=skate_runs()),
+    }
+    written = []
+    for name, draw in drawings.items():
+        fig = draw()
+        fig.savefig(out / name, dpi=100, bbox_inches="tight")
+        plt.close(fig)
+        written.append(out / name)
+    return written

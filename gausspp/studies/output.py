@@ -1,0 +1,98 @@
+"""A trajectory written to files: ``<scene>.npz`` (every array and the run's metadata), ``<scene>.csv``
+(named columns) and, with matplotlib, ``<scene>.png`` (q(t) and v(t))."""
+
+from __future__ import annotations
+
+import inspect
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import plot, scenes
+from ..errors import GaussppError
+from ..simulation.trajectory import Trajectory
+from .tables import label
+
+
+def energy_balance(traj: Trajectory) -> np.ndarray:
+    """``ΔE − W_reaction − W_forces`` at every sample (empty for an empty trajectory)."""
+    return traj.energy_balance() if len(traj) else np.zeros(0)
+
+
+def columns(traj: Trajectory) -> tuple[list[str], np.ndarray]:
+    """The trajectory as named columns (for CSV): ``t``, ``q1…``, ``v1…``, ``lam1…``, …, ``energy_balance``."""
+    names, blocks = ["t"], [traj.t[:, None]]
+    for key in ("q", "v", "lam", "a", "u", "residual", "g"):
+        arr = getattr(traj, key)
+        names += [f"{key}{i + 1}" for i in range(arr.shape[1])]
+        blocks.append(arr)
+    for key in ("margin", "compulsion", "energy", "work_reaction", "work_forces"):
+        arr = getattr(traj, key)
+        if arr.size == traj.t.size:
+            names.append(key)
+            blocks.append(arr[:, None])
+    names.append("energy_balance")
+    blocks.append(energy_balance(traj)[:, None])
+    return names, np.hstack(blocks) if traj.t.size else np.zeros((0, len(names)))
+
+
+def write_trajectory(traj: Trajectory, scene: scenes.Scene, params: dict[str, Any], out: Path) -> list[Path]:
+    """``<scene>.npz`` (every array and the run's metadata), ``<scene>.csv`` and, with matplotlib, ``<scene>.png``."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        base = out / scene.name
+        arrays = {k: np.asarray(getattr(traj, k)) for k in traj.__dataclass_fields__ if k not in ("status", "message")}
+        meta = dict(scene=scene.name, params=json.dumps(params, default=repr), status=traj.status, message=traj.message)
+        np.savez(base.with_suffix(".npz"), energy_balance=energy_balance(traj), **arrays, **meta)  # type: ignore[arg-type]
+        names, data = columns(traj)
+        np.savetxt(base.with_suffix(".csv"), data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+        files = [base.with_suffix(".npz"), base.with_suffix(".csv")]
+    except OSError as exc:
+        raise GaussppError(f"cannot write to {out}: {exc.strerror or exc}") from exc
+    if len(traj):
+        png = plot_trajectory(traj, f"{label(scene.name, params)} · {traj.method} · {traj.status}", base)
+        if png is not None:
+            files.append(png)
+    return files
+
+
+def _draw(plt: Any, traj: Trajectory, title: str) -> Any:
+    """q(t) and v(t): ``gausspp.plot.trajectory`` if there is one, else two plain panels."""
+    drawer = getattr(plot, "trajectory", None)
+    if drawer is not None and "title" in inspect.signature(drawer).parameters:
+        return drawer(traj, title=title)
+    if drawer is not None:
+        fig = drawer(traj)
+        fig.suptitle(title, fontsize=9)
+        return fig
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7, 5))
+    for ax, key, sym in ((axes[0], "q", "q"), (axes[1], "v", "v")):
+        arr = getattr(traj, key)
+        for i in range(arr.shape[1]):
+            ax.plot(traj.t, arr[:, i], label=f"{sym}{i}")
+        ax.set_ylabel(sym)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7, ncol=min(arr.shape[1], 6), loc="best")
+    axes[1].set_xlabel("t")
+    fig.suptitle(title, fontsize=9)
+    return fig
+
+
+def plot_trajectory(traj: Trajectory, title: str, base: Path) -> Path | None:
+    """q(t) and v(t) as ``<base>.png``; None (with a note on stdout) without matplotlib."""
+    try:
+        plt = plot.pyplot()
+    except GaussppError as exc:
+        print(f"(no plot: {exc})")
+        return None
+    fig = _draw(plt, traj, title)
+    path = base.with_suffix(".png")
+    try:
+        fig.savefig(path, dpi=110, bbox_inches="tight")
+    except OSError as exc:
+        raise GaussppError(f"cannot write {path}: {exc.strerror or exc}") from exc
+    finally:
+        plt.close(fig)
+    return path
