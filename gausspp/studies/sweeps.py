@@ -289,7 +289,7 @@ class SweepResult:
 
 # -- built-in tasks -----------------------------------------------------------------------------------
 def realizability_task(params: Mapping[str, Any]) -> dict[str, float]:
-    """The servo-torque realizability margin for one body axis ``n`` (see :func:`gausspp.studies.realizability_map.servo_margin`).
+    """The servo-torque realizability margin for one body axis ``n`` (see :mod:`gausspp.studies.realizability_map`).
 
     Parameters (keys of ``params``): ``lon``, ``lat`` — the direction of ``n`` in degrees;
     ``inertia`` (default ``(1, 2, 3)``) and ``l`` (default ``(1, 1, 1)``).
