@@ -37,6 +37,10 @@ from .base import ALL_FORMS, FORMS, QP, QPAnswer, QPBackend
 from .casadi_conic import PLUGINS, CasadiConic, plugin_available
 from .qpsolvers_route import QpsolversBackend
 
+#: Backends accurate to about 1e-7 only (HiGHS' QP): on a nearly singular stage — redundant rows off the
+#: constraint manifold — the general QP's optimality check refuses their answer with a QPSolveError that
+#: names the exact backends, rather than passing an inaccurate acceleration on.
+APPROXIMATE: frozenset[str] = frozenset({"casadi:highs"})
 #: The compiled step's default backend.
 DEFAULT = "casadi:qrqp"
 #: The general QP's default: the first of these installed here.

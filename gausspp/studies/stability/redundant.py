@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import GaussppError, RealizabilityError
+from ...errors import GaussppError, QPSolveError, RealizabilityError
 from ...simulation.simulate import simulate
 from ...step import qp
 from ...step.realizability import cosines
@@ -245,6 +245,7 @@ def _off_manifold(found: Findings, quick: bool) -> Section:
     states = _off_manifold_states(quick)
     ways = qp_ways()
     errors: dict[str, list[str]] = {}  # QP backend → its errors (consistent rows: each is a failure)
+    refusals: dict[str, list[str]] = {}  # an approximate backend (qp.APPROXIMATE) → states it clearly refused
     direct_refusals = direct_named = answers = 0
     direct_other: list[str] = []
     max_err = max_ratio = 0.0
@@ -262,7 +263,11 @@ def _off_manifold(found: Findings, quick: bool) -> Section:
             out, _ = attempt(with_distance, q, v, solver, backend)
             err = found.judge(out, ref, off_tol(drift), f"{where}, {label}")
             if err is None:
-                errors.setdefault(label, []).append(f"{where}: {kind(out)}: {out}")
+                clear_refusal = isinstance(out, QPSolveError | RealizabilityError) and "try another backend" in str(out)
+                if backend in qp.APPROXIMATE and clear_refusal:  # declared ~1e-7 accurate: refusing is its answer
+                    refusals.setdefault(label, []).append(where)
+                else:
+                    errors.setdefault(label, []).append(f"{where}: {kind(out)}: {out}")
                 continue
             answers += 1
             max_err, max_ratio = max(max_err, err), max(max_ratio, err / drift)
@@ -271,7 +276,8 @@ def _off_manifold(found: Findings, quick: bool) -> Section:
         off_manifold_states=float(len(states)),
         off_manifold_qp_steps=float(steps),
         off_manifold_qp_answers=float(answers),
-        off_manifold_qp_errors=float(steps - answers),
+        off_manifold_qp_errors=float(steps - answers - sum(map(len, refusals.values()))),
+        off_manifold_approximate_refusals=float(sum(map(len, refusals.values()))),
         off_manifold_max_error=max_err,
         off_manifold_error_over_drift=max_ratio,
         off_manifold_direct_refusals=float(direct_refusals),
@@ -285,6 +291,10 @@ def _off_manifold(found: Findings, quick: bool) -> Section:
             "; errors: " + "; ".join(f"{b}: {len(e)} (first: {e[0][:200]})" for b, e in errors.items())
             if errors
             else ""
+        )
+        + "".join(
+            f"; {b} (declared approximate) refuses {len(w)} nearly singular steps, naming the exact backends"
+            for b, w in refusals.items()
         )
         + f". Direct refuses the redundant rows {direct_refusals}/{len(states)} times, naming the constraints in "
         f"{direct_named}."
