@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import ast
 from collections.abc import Iterator
-from dataclasses import dataclass, fields, replace
+from dataclasses import fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 import gausspp as gp
+from gausspp.model.derived import gaps as contact_gaps
 
 pytest.importorskip("matplotlib")
 from gausspp import plot  # noqa: E402
@@ -271,22 +272,13 @@ def markers(ax: Any, *gids: str) -> int:
     return sum(len(line.get_xdata()) for line in ax.get_lines() if line.get_gid() in gids)
 
 
-@dataclass(frozen=True)
-class WithGaps(gp.Trajectory):
-    """A run and its gaps ``(N, n_contact_rows)``, for runs made before simulate recorded ``traj.gap``."""
-
-    gap: np.ndarray | None = None
-
-
 def recorded(model: gp.Model, traj: gp.Trajectory) -> gp.Trajectory:
-    """``traj`` with its gaps ``traj.gap``: as recorded by simulate, else evaluated here from the model's
-    contact expressions (the test's own bridge; ``plot.contacts`` never evaluates the model)."""
-    if getattr(traj, "gap", None) is not None:
-        return traj
-    mech = model.mechanism
-    gaps = ca.Function("gaps", [mech.t, mech.q, mech.v], [model.contact_expressions[0]])
-    gap = np.array([np.array(gaps(t, q, v)).ravel() for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)])
-    return WithGaps(**{f.name: getattr(traj, f.name) for f in fields(traj)}, gap=gap.reshape(traj.t.size, -1))
+    """``traj``, after checking that its recorded gaps are the model's gaps at each sample (``plot.contacts`` draws
+    ``traj.gap`` and never evaluates the model)."""
+    states = zip(traj.t, traj.q, traj.v, strict=True)
+    expected = np.array([contact_gaps(model, t, q, v)[0] for t, q, v in states]).reshape(traj.t.size, -1)
+    np.testing.assert_allclose(traj.gap, expected, rtol=0, atol=1e-12)
+    return traj
 
 
 @pytest.fixture(scope="module")

@@ -42,6 +42,10 @@ class Workspace:
     def __contains__(self, key: Hashable) -> bool:
         return key in self._items
 
+    def keys(self) -> list[Hashable]:
+        """The keys stored so far, in the order they were built."""
+        return list(self._items)
+
     def __len__(self) -> int:
         return len(self._items)
 
