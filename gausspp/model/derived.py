@@ -13,6 +13,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..step.kernel import Bound, dense_outputs, load_inputs
 from .constraints import Holonomic
 from .model import Model
 from .workspace import workspace
@@ -60,10 +61,16 @@ def sub_model(model: Model, keep: tuple[int, ...]) -> Model:
 
 
 def gaps(model: Model, t: float, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The contact rows' gaps ``g_c(q, t)`` and gap rates ``ġ_c`` at a state."""
-    mech, c = model.mechanism, model.contact_expressions
-    fn = workspace(model).get(
-        ("contact-gaps",), lambda: ca.Function("contact_gaps", [mech.t, mech.q, mech.v], [c.g, c.gdot])
-    )
-    g, gdot = fn(t, q, v)
-    return np.array(g).ravel(), np.array(gdot).ravel()
+    """The contact rows' gaps ``g_c(q, t)`` and gap rates ``ġ_c`` at a state (one buffer-bound C call)."""
+
+    def build() -> Bound:
+        mech, c = model.mechanism, model.contact_expressions
+        fn = ca.Function("contact_gaps", [mech.t, mech.q, mech.v], [c.g, c.gdot])
+        return Bound(
+            ca.Function("contact_gaps", [mech.t, mech.q, mech.v], dense_outputs(fn.call([mech.t, mech.q, mech.v])))
+        )
+
+    bound = workspace(model).get(("contact-gaps",), build)
+    load_inputs(bound.args, (t, q, v))
+    bound.eval()
+    return bound.res[0].copy(), bound.res[1].copy()

@@ -96,6 +96,7 @@ class Model:
         bilateral = [(c, n) for c, n in zip(constraints, all_names, strict=True) if not isinstance(c, Unilateral)]
         unilateral = [(c, n) for c, n in zip(constraints, all_names, strict=True) if isinstance(c, Unilateral)]
         self.mechanism = mechanism
+        self.nq, self.nv = mechanism.nq, mechanism.nv
         self.constraints = tuple(c for c, _ in bilateral)
         self.names = [n for _, n in bilateral]
         self.contacts: tuple[Unilateral, ...] = tuple(c for c, _ in unilateral)
@@ -128,14 +129,6 @@ class Model:
         object.__setattr__(self, name, value)
 
     # -- sizes and symbols -------------------------------------------------------------------
-    @property
-    def nq(self) -> int:
-        return self.mechanism.nq
-
-    @property
-    def nv(self) -> int:
-        return self.mechanism.nv
-
     @property
     def lam(self) -> ca.SX:
         """The symbol of the ``λ`` state (an input of every compiled function)."""

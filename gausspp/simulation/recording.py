@@ -54,7 +54,8 @@ class Columns:
         self.a[i] = out["a"].ravel()
         u = out["u"].ravel()
         self.u[i] = u[:m]
-        self.contact_force[i, list(active)] = u[m:]
+        if active:
+            self.contact_force[i, list(active)] = u[m:]
         self.reaction[i] = out["reaction"].ravel()
         self.compulsion[i] = float(out["compulsion"][0])
         self.residual[i] = out["Phi"].ravel()[:k]
@@ -81,8 +82,9 @@ class Columns:
 def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples) -> Recorded:
     """The trajectory of a smooth run, its margin audited; samples past a lost margin are dropped."""
     y = samples.y.copy()
+    nq, normalize = model.nq, model.mechanism.normalize_array
     for row in y:  # adaptive lanes integrate q freely: bring samples back onto the manifold (unit quaternions)
-        row[: model.nq] = model.mechanism.normalize_array(row[: model.nq])
+        row[:nq] = normalize(row[:nq])
     samples = replace(samples, y=y)
     general = isinstance(rhs, GeneralRightHandSide)
 

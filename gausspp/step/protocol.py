@@ -58,9 +58,5 @@ class StepModel(Protocol):
     margin_error: float
     refine: bool
     contact_tol: float
-
-    @property
-    def nq(self) -> int: ...
-
-    @property
-    def nv(self) -> int: ...
+    nq: int
+    nv: int

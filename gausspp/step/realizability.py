@@ -51,12 +51,13 @@ def cosines(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> np.ndarray:
 
 def margin_of(cos: np.ndarray, k: int, m: int) -> float:
     """The margin ``σ_k`` from the cosines of ``k`` rows and ``m`` directions: 1 if ``k = 0``, 0 if ``k > m``
-    (or no cosines), else the smallest (NaN in, NaN out: the caller's finite check fails)."""
+    (or no cosines), else the smallest — the last, as singular values come largest first (NaN in, NaN out:
+    the caller's finite check fails)."""
     if k == 0:
         return 1.0
     if k > m or cos.size == 0:
         return 0.0
-    return float(np.min(cos))
+    return float(cos[-1])
 
 
 def cosines_and_margin(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> tuple[np.ndarray, float]:
