@@ -15,7 +15,7 @@ import pytest
 
 import gausspp as gp
 from gausspp.errors import FrozenModelError
-from gausspp.model.workspace import workspace
+from gausspp.workspace import workspace
 
 ROOT = Path(__file__).resolve().parents[1]
 _spec = importlib.util.spec_from_file_location("architecture", ROOT / "benchmarks" / "architecture.py")

@@ -35,7 +35,7 @@ from hypothesis import strategies as st
 import gausspp as gp
 from gausspp.scenes import four_bar
 from gausspp.studies.stability import redundant
-from gausspp.studies.stability._case import quiet_c_output
+from gausspp.studies.stability.common import quiet_c_output
 
 #: Every backend of ``solver="qp"`` that reaches the general QP: the default and each qpsolvers one installed.
 BACKENDS: tuple[str | None, ...] = (

@@ -297,7 +297,7 @@ def test_redundant_exact_duplicates_qp_answers_the_minimal_acceleration_and_leas
     minimal, doubled = redundant.circle_twice()
     q, v = redundant.circle_state()
     ref = minimal.step(0.0, q, v, solver="direct")
-    with warnings.catch_warnings(), stability._case.quiet_c_output():
+    with warnings.catch_warnings(), stability.common.quiet_c_output():
         warnings.simplefilter("ignore")  # Clarabel warns about its own numerical error
         res = doubled.step(0.0, q, v, solver="qp", backend=backend)
     assert res.solver.startswith("gauss-qp:"), res.solver
@@ -358,7 +358,7 @@ def test_redundant_rows_that_contradict_each_other_raise(backend: str | None) ->
         model, q, v, t = models[name]
         with pytest.raises(gp.RealizabilityError, match=r"'equal speeds', 'speeds apart'.*redundant.*solver='qp'"):
             model.step(t, q, v, solver="direct")
-        with warnings.catch_warnings(), stability._case.quiet_c_output():
+        with warnings.catch_warnings(), stability.common.quiet_c_output():
             warnings.simplefilter("ignore")  # Clarabel warns about its own numerical error
             with pytest.raises(gp.RealizabilityError, match=r"dependent and contradict each other") as info:
                 model.step(t, q, v, solver="qp", backend=backend)

@@ -22,7 +22,7 @@ import numpy as np
 
 from .. import plot, scenes
 from ..errors import GaussppError, UnknownNameError
-from ..scenes._scene import kinds as parameter_kinds
+from ..scenes.scene import kinds as parameter_kinds
 from ..simulation import methods
 from ..simulation.trajectory import Trajectory
 from ..step import qp

@@ -9,7 +9,7 @@ from typing import Any
 
 from .. import scenes
 from ..errors import GaussppError
-from ..scenes._scene import kinds as parameter_kinds
+from ..scenes.scene import kinds as parameter_kinds
 from ..studies.tables import label, one_line
 from .console import UsageError
 

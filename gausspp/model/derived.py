@@ -3,7 +3,7 @@
 An event-driven simulation needs, between two events, the model with the closed contacts as ideal
 bilateral constraints (:func:`phase_model`); the verification of a saturated interval needs the model
 without the saturated actuators (:func:`sub_model`). Both are built once per model and key, and kept in
-the model's workspace (:mod:`gausspp.model.workspace`).
+the model's workspace (:mod:`gausspp.workspace`).
 """
 
 from __future__ import annotations
@@ -14,9 +14,9 @@ import casadi as ca
 import numpy as np
 
 from ..step.kernel import Bound, dense_outputs, load_inputs
+from ..workspace import workspace
 from .constraints import Holonomic
 from .model import Model
-from .workspace import workspace
 
 
 def _like(model: Model, constraints: list[Any]) -> Model:

@@ -5,7 +5,7 @@ end and constraints (:mod:`gausspp.model.assembly`) and offers the checked entry
 (:meth:`Model.step`, :meth:`Model.general_step`, :meth:`Model.impact`), which the step layer
 (:mod:`gausspp.step`) carries out. A model does not change after construction: setting an attribute
 raises :class:`~gausspp.errors.FrozenModelError`. What is built from it on demand — compiled kernels,
-bound functions, projections — lives in its workspace (:mod:`gausspp.model.workspace`), not in it.
+bound functions, projections — lives in its workspace (:mod:`gausspp.workspace`), not in it.
 """
 
 from __future__ import annotations

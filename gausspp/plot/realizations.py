@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..scenes._rigid import inertia_matrix, unit_vector
+from ..scenes.rigid import inertia_matrix, unit_vector
 from ..scenes.suslov import steady_rotation
 from .base import given, pyplot, suffix, vec
 

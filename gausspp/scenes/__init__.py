@@ -13,8 +13,8 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import InputError, UnknownNameError
-from ._scene import Scene, check_parameters
-from ._scene import parameters as _parameters
+from .scene import Scene, check_parameters
+from .scene import parameters as _parameters
 
 #: scene name → module in this package
 _MODULES: dict[str, str] = {
@@ -70,7 +70,7 @@ def parameters(name: str) -> dict[str, inspect.Parameter]:
 def get(name: str, **params: Any) -> Scene:
     """Build the scene ``name`` with ``params`` (see each scene's ``build`` docstring).
 
-    Every parameter is checked first, in one place (:func:`~gausspp.scenes._scene.check_parameters`):
+    Every parameter is checked first, in one place (:func:`~gausspp.scenes.scene.check_parameters`):
     an unknown name is an :class:`~gausspp.UnknownNameError`, a value of the wrong type (``F="two"``,
     ``n=2.5``) an :class:`~gausspp.InputError`, NaN or inf a :class:`~gausspp.NonFiniteError`. A module
     lists in ``INFINITE_OK`` the parameters that may be infinite (a bound that is absent).

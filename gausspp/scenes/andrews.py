@@ -49,7 +49,7 @@ from ..errors import InputError
 from ..model.constraints import Holonomic
 from ..model.mechanism import MassMatrix
 from ..model.model import Model
-from ._scene import Scene
+from .scene import Scene
 
 # -- parameters (SI units), test-set names --------------------------------------------------------
 m1, m2, m3, m4, m5, m6, m7 = 0.04325, 0.00365, 0.02373, 0.00706, 0.07050, 0.00706, 0.05498

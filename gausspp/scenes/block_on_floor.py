@@ -25,7 +25,7 @@ from ..errors import InputError
 from ..model.constraints import Unilateral
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
-from ._scene import Scene
+from .scene import Scene
 
 
 def bounce_times(height: float, e: float, g: float, count: int) -> np.ndarray:

@@ -22,7 +22,7 @@ from ..errors import InputError
 from ..model.constraints import Holonomic, Unilateral
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
-from ._scene import Scene
+from .scene import Scene
 
 
 def impact_times(L: float, g: float, theta0: float, e: float, count: int) -> np.ndarray:

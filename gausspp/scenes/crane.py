@@ -44,7 +44,7 @@ from ..model.constraints import Holonomic
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
 from ..model.realizations import Force
-from ._scene import Scene
+from .scene import Scene
 
 
 def margin_closed_form(theta: Any, M0: float, m: float) -> Any:

@@ -45,7 +45,7 @@ from ..errors import InputError, UnknownNameError
 from ..model.constraints import Holonomic
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
-from ._scene import Scene
+from .scene import Scene
 
 THIRD_ROWS = ("oblique", "distance")
 

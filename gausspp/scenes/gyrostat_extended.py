@@ -31,8 +31,8 @@ from ..model.constraints import Constraint
 from ..model.mechanism import MassMatrix
 from ..model.model import Model
 from ..model.realizations import Force
-from ._rigid import inertia_matrix, on_plane, unit_vector
-from ._scene import Scene
+from .rigid import inertia_matrix, on_plane, unit_vector
+from .scene import Scene
 
 
 def rotor_momentum(v: Any, n: Any, rotor_inertia: float) -> np.ndarray:

@@ -30,7 +30,7 @@ from ..model.mechanism import Lagrangian
 from ..model.model import Model
 from ..model.realizations import Mixed
 from ..validation import array
-from ._scene import Scene
+from .scene import Scene
 
 LAWS = ("proportional", "rate")
 

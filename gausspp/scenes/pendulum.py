@@ -26,7 +26,7 @@ from ..errors import InputError
 from ..model.constraints import Holonomic
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
-from ._scene import Scene
+from .scene import Scene
 
 
 def build(

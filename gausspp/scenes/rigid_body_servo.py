@@ -17,8 +17,8 @@ from ..model.constraints import Constraint
 from ..model.mechanism import RigidBody
 from ..model.model import Model
 from ..model.realizations import Force
-from ._rigid import inertia_matrix, on_plane, unit_vector
-from ._scene import Scene
+from .rigid import inertia_matrix, on_plane, unit_vector
+from .scene import Scene
 
 
 def build(

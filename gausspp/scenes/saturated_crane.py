@@ -32,7 +32,7 @@ from ..model.model import Model
 from ..model.realizations import Force
 from ..simulation.drift import Baumgarte
 from . import crane
-from ._scene import Scene
+from .scene import Scene
 
 #: Parameters that may be infinite (checked by gausspp.scenes.get): no bound on the motor.
 INFINITE_OK = ("F_max",)

@@ -31,7 +31,7 @@ from ..model.constraints import Constraint
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
 from ..model.realizations import Ideal, Vakonomic
-from ._scene import Scene
+from .scene import Scene
 
 REALIZATIONS = ("nonholonomic", "vakonomic")
 

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ._rigid import inertia_matrix, on_plane, unit_vector
+from .rigid import inertia_matrix, on_plane, unit_vector
 
 
 def _plane(inertia: Any, l: Any, omega0: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:

@@ -43,8 +43,8 @@ from ..model.constraints import Holonomic
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
 from ..model.realizations import Force
-from ._scene import Scene
 from .crane import _sigma
+from .scene import Scene
 
 
 def altitude(climb: float, duration: float) -> Callable[[Any], Any]:

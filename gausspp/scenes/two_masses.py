@@ -19,7 +19,7 @@ from ..model.constraints import Constraint
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
 from ..model.realizations import Force, Ideal
-from ._scene import Scene
+from .scene import Scene
 
 REALIZATIONS = ("ideal", "servo")
 

@@ -14,12 +14,12 @@ import numpy as np
 
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError, RealizabilityError
 from ..model.model import Model
-from ..model.workspace import workspace
 from ..step import realizability
 from ..step.expressions import OUTPUTS, reduce
 from ..step.kernel import CompiledKernel
 from ..step.qp.casadi_conic import stdout_silenced
 from ..step.realizability import MARGIN_BOUND_ROWS
+from ..workspace import workspace
 from . import lanes
 from . import methods as _methods
 from .drift import Stabilization, projection_function

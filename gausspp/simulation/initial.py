@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import GaussppError, InitialDataError, RealizabilityWarning
 from ..model.model import Model
-from ..model.workspace import workspace
+from ..workspace import workspace
 from .drift import projection_function
 
 #: ``(t, q, v, λ) ↦ (q', v')``: a projection onto the constraint.

@@ -14,7 +14,7 @@ import scipy.integrate as si
 
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError
 from ..model.model import Model
-from ..model.workspace import workspace
+from ..workspace import workspace
 from . import inputs
 from . import methods as _methods
 from .compiled import rhs_function

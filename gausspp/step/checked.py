@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import GaussppError, InputError, QPSolveError, RealizabilityError, UnknownNameError
-from ..model.workspace import workspace
+from ..workspace import workspace
 from . import qp
 from .data import NO_STAB, evaluate
 from .general_step import solve_at

@@ -18,7 +18,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, NonFiniteError, ShapeError
-from ..model.workspace import workspace
+from ..workspace import workspace
 from .kernel import Bound, dense_outputs, load_inputs
 from .protocol import StepModel
 

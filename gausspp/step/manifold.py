@@ -14,7 +14,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import RealizabilityError
-from ..model.workspace import workspace
+from ..workspace import workspace
 from .data import evaluate
 from .general import GaussProblem
 from .model_qp import gauss_problem

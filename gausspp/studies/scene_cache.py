@@ -24,7 +24,7 @@ def _thaw(value: Any) -> Any:
 
 
 @functools.lru_cache(maxsize=32)
-def _scene(name: str, frozen: tuple[tuple[str, Any], ...]) -> Any:
+def scene(name: str, frozen: tuple[tuple[str, Any], ...]) -> Any:
     return scenes.get(name, **{k: _thaw(v) for k, v in frozen})
 
 
@@ -34,4 +34,4 @@ def cached_scene(name: str, **params: Any) -> Any:
     Task functions call this instead of building the model themselves: a worker then compiles each
     distinct model once, however many tasks it runs. Parameter lists are frozen into tuples for the cache.
     """
-    return _scene(name, _freeze(params))
+    return scene(name, _freeze(params))

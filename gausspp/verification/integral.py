@@ -35,9 +35,9 @@ from scipy.interpolate import make_interp_spline
 
 from ..errors import InitialDataError, InputError, NonFiniteError, QPSolveError, ShapeError, UnknownNameError
 from ..model.model import Model
-from ..model.workspace import workspace
 from ..step.general import RANK_TOL
 from ..validation import array, positive, short
+from ..workspace import workspace
 
 #: Relative gap below which a path counts as a motion whatever the refinement says (round-off).
 GAP_FLOOR = 1e-8

@@ -45,7 +45,7 @@ from dataclasses import replace
 from typing import Any
 
 from . import crane, long_horizon, margins, mass_ratios, off_constraint, redundant, stiff_chain
-from ._case import Case
+from .common import Case
 
 _MODULES = (stiff_chain, mass_ratios, margins, long_horizon, redundant, off_constraint, crane)
 

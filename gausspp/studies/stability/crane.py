@@ -15,7 +15,7 @@ from ...model.model import Model
 from ...scenes.crane import margin_closed_form
 from ...simulation.simulate import simulate
 from ...simulation.trajectory import Trajectory
-from ._case import (
+from .common import (
     CRANE_G,
     CRANE_L,
     CRANE_M,

@@ -11,7 +11,7 @@ from ... import scenes
 from ...simulation.drift import Baumgarte
 from ...simulation.simulate import simulate
 from ...simulation.trajectory import Trajectory
-from ._case import Case, fmt
+from .common import Case, fmt
 
 NAME = "long horizon"
 WHAT = (

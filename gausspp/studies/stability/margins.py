@@ -9,7 +9,7 @@ import numpy as np
 from ... import scenes
 from ...errors import GaussppError, RealizabilityError
 from ...scenes.crane import margin_closed_form
-from ._case import (
+from .common import (
     CRANE_G,
     CRANE_L,
     CRANE_M,

@@ -9,7 +9,7 @@ import numpy as np
 from ... import scenes
 from ...errors import GaussppError
 from ...step.problem import StepProblem
-from ._case import EPS, Case, fmt, realizability_warnings, recorded, relative, solvers
+from .common import EPS, Case, fmt, realizability_warnings, recorded, relative, solvers
 
 NAME = "mass ratios"
 WHAT = (

@@ -10,7 +10,7 @@ from ... import scenes
 from ...errors import GaussppError, InitialDataError
 from ...model.model import Model
 from ...simulation.simulate import simulate
-from ._case import CRANE_G, CRANE_L, CRANE_M, CRANE_M0, CRANE_ROW, Case, recorded
+from .common import CRANE_G, CRANE_L, CRANE_M, CRANE_M0, CRANE_ROW, Case, recorded
 
 NAME = "initial data off the constraint"
 WHAT = (

@@ -22,7 +22,7 @@ from ...simulation.simulate import simulate
 from ...step import qp
 from ...step.realizability import cosines
 from ...step.results import StepResult
-from ._case import Case, fmt, quiet_c_output, recorded, relative
+from .common import Case, fmt, quiet_c_output, recorded, relative
 from .redundant_setups import (
     CIRCLES,
     DRIFTS,

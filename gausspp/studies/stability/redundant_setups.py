@@ -19,7 +19,7 @@ from ...model.mechanism import Lagrangian, MassMatrix
 from ...model.model import Model
 from ...step import qp
 from ...step.results import StepResult
-from ._case import Solver, fmt, quiet_c_output, realizability_warnings, recorded, relative, solvers
+from .common import Solver, fmt, quiet_c_output, realizability_warnings, recorded, relative, solvers
 
 PINS = ("pin-x", "pin-z", "distance")
 CIRCLES = ("circle", "circle again")

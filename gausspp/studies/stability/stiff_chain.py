@@ -12,7 +12,7 @@ from ...errors import GaussppError
 from ...model.model import Model
 from ...simulation.simulate import simulate
 from ...simulation.trajectory import Trajectory
-from ._case import Case, fmt
+from .common import Case, fmt
 
 NAME = "stiff chain"
 WHAT = (
