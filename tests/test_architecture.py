@@ -112,6 +112,43 @@ def test_plot_imports_no_computing_code() -> None:
     assert not bad, f"gausspp.plot imports {sorted(bad)}: plot draws results it is given"
 
 
+#: The layers from the bottom: each imports nothing of the layers above it (docs/architecture.md).
+LAYERS = (
+    "gausspp.step",
+    "gausspp.model",
+    "gausspp.simulation",
+    "gausspp.scenes",
+    "gausspp.verification",
+    "gausspp.studies",
+    "gausspp.cli",
+)
+
+
+def _upward_imports(graph: dict[str, set[str]], layers: tuple[str, ...]) -> list[str]:
+    def layer(module: str) -> int | None:
+        return next((i for i, p in enumerate(layers) if module == p or module.startswith(p + ".")), None)
+
+    return sorted(
+        f"{m} -> {d}"
+        for m, deps in graph.items()
+        for d in deps
+        if (lm := layer(m)) is not None and (ld := layer(d)) is not None and ld > lm
+    )
+
+
+def test_an_upward_import_is_found(tmp_path: Path) -> None:
+    root = _package(
+        tmp_path,
+        {"low/__init__.py": "", "low/a.py": "from ..high.b import X\n", "high/__init__.py": "", "high/b.py": "X = 1\n"},
+    )
+    assert _upward_imports(arch.import_graph(root), ("pkg.low", "pkg.high")) == ["pkg.low.a -> pkg.high.b"]
+
+
+def test_each_layer_imports_only_the_layers_below() -> None:
+    """The step layer never imports the model (it reads the StepModel protocol), and so on up to the command line."""
+    assert _upward_imports(arch.import_graph(PACKAGE), LAYERS) == []
+
+
 def test_a_model_does_not_change() -> None:
     """Setting an attribute raises; stepping, simulating and verifying leave the model's attributes as they were."""
     scene = gp.scenes.get("pendulum")
