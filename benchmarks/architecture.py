@@ -143,6 +143,35 @@ def foreign_writes(root: Path) -> list[str]:
     return sorted(set(found))
 
 
+def code_lines(path: Path) -> int:
+    """Lines that hold code: not blank, not a comment, not part of a docstring."""
+    text = path.read_text()
+    doc: set[int] = set()
+    for node in ast.walk(ast.parse(text)):
+        if isinstance(node, ast.Module | ast.ClassDef | ast.FunctionDef | ast.AsyncFunctionDef) and node.body:
+            first = node.body[0]
+            if (
+                isinstance(first, ast.Expr)
+                and isinstance(first.value, ast.Constant)
+                and isinstance(first.value.value, str)
+            ):
+                doc.update(range(first.lineno, (first.end_lineno or first.lineno) + 1))
+    return sum(
+        1
+        for i, line in enumerate(text.splitlines(), 1)
+        if line.strip() and not line.strip().startswith("#") and i not in doc
+    )
+
+
+def long_functions(path: Path, limit: int = 60) -> int:
+    """How many functions or methods of one file are longer than ``limit`` lines."""
+    return sum(
+        (node.end_lineno or node.lineno) - node.lineno + 1 > limit
+        for node in ast.walk(ast.parse(path.read_text()))
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef)
+    )
+
+
 def longest_function(path: Path) -> tuple[int, str]:
     """(lines, name) of the longest function or method in one file."""
     best = (0, "")
@@ -165,10 +194,11 @@ def main(root: Path) -> None:
     depth = levels(graph)
     print(f"modules                 {len(files)}  ({len(top_level)} flat at the top)")
     print(f"packages                {sorted({rel[f].rsplit('/', 1)[0] for f in files})}")
-    print(f"lines                   {sum(sizes.values())}")
+    print(f"lines                   {sum(sizes.values())}  ({sum(map(code_lines, files))} of code)")
     print(f"largest module          {rel[big]} ({sizes[big]} lines)")
     print(f"largest function        {fn_file}:{fn_name} ({fn_len} lines)")
     print(f"modules over 400 lines  {sum(s > 400 for s in sizes.values())}")
+    print(f"functions over 60 lines {sum(map(long_functions, files))}")
     print(f"import levels           {max(depth.values())}")
     print(f"import cycles           {len(cycles)}  {cycles}")
     writes = foreign_writes(root)
