@@ -16,7 +16,25 @@ from ..step.outcome import QP_TOLERANCE, Where, evaluation_failed, step_margin, 
 from .drift import Stabilization
 
 
-class RightHandSide:
+class _StateDerivative:
+    """``F(t, y) = (q̇, q̈, λ̇, power of the reaction, power of the forces)`` from a step's outputs."""
+
+    _lam_cols: np.ndarray
+
+    def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
+        raise NotImplementedError
+
+    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+        out = self.evaluate(t, y)
+        u = out["u"]
+        return np.concatenate([out["qdot"], out["a"], u[self._lam_cols], out["power_reaction"], out["power_forces"]])
+
+    def qdot(self, t: float, y: np.ndarray) -> np.ndarray:
+        """The kinematics ``q̇ = K(q, v, t)`` at ``y`` (one step evaluation)."""
+        return np.array(self.evaluate(t, y)["qdot"])
+
+
+class RightHandSide(_StateDerivative):
     """``F(t, y)`` for a model, a step solver and a stabilization; counts its evaluations."""
 
     #: Whether the realizability margin of its steps means something (see :class:`GeneralRightHandSide`).
@@ -64,17 +82,8 @@ class RightHandSide:
             to_result(dict(out), where, margin_warn=0.0, margin_error=m.margin_error)
         return out
 
-    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
-        out = self.evaluate(t, y)
-        u = out["u"]
-        return np.concatenate([out["qdot"], out["a"], u[self._lam_cols], out["power_reaction"], out["power_forces"]])
 
-    def qdot(self, t: float, y: np.ndarray) -> np.ndarray:
-        """The kinematics ``q̇ = K(q, v, t)`` at ``y`` (one step evaluation)."""
-        return np.array(self.evaluate(t, y)["qdot"])
-
-
-class GeneralRightHandSide:
+class GeneralRightHandSide(_StateDerivative):
     """``F(t, y)`` through the general Gauss QP (:meth:`Model.general_step`): bounded actuators and
     redundant constraint rows. One numeric QP per evaluation, from Python (tens to hundreds of µs)."""
 
@@ -121,15 +130,6 @@ class GeneralRightHandSide:
             "saturated": np.asarray(res.saturated, bool),
             **extras,
         }
-
-    def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
-        out = self.evaluate(t, y)
-        u = out["u"]
-        return np.concatenate([out["qdot"], out["a"], u[self._lam_cols], out["power_reaction"], out["power_forces"]])
-
-    def qdot(self, t: float, y: np.ndarray) -> np.ndarray:
-        """The kinematics ``q̇ = K(q, v, t)`` at ``y``."""
-        return np.array(self.evaluate(t, y)["qdot"])
 
 
 #: Either right-hand side (the compiled step, or the general QP's).
