@@ -119,12 +119,11 @@ def _lane(label: str, model: Model, fall: scenes.Scene, method: str, options: di
     }
 
 
-def case(quick: bool = True) -> Case:
-    """Margin ∝ sin²θ; driven to the vertical rope, every lane must stop at t* and say why."""
-    f: dict[str, float] = {"t_star": T_STAR}
-    # step level
+def _step_level(thetas: list[float]) -> tuple[float, int, int]:
+    """At step level: the worst relative error of the margin against the closed form over ``thetas``, how many
+    warnings are right (given exactly below the warning threshold, with the time), and how many of the two
+    solvers raise RealizabilityError at the vertical rope naming constraint, time and margin."""
     model = scenes.get("crane", M0=CRANE_M0, m=CRANE_M, L=CRANE_L, g=CRANE_G).model
-    thetas = [0.3, 0.1, 0.03, 0.01, 3e-3, 1e-3, 1e-4]
     worst_closed, warn_ok = 0.0, 0
     for theta in thetas:
         with recorded() as caught:
@@ -143,14 +142,11 @@ def case(quick: bool = True) -> Case:
                 and vertical.margin < 1e-12
                 and "t=1.25" in str(vertical)
             )
-    f.update(
-        step_margin_vs_closed_form=worst_closed,
-        step_warnings_correct=float(warn_ok),
-        vertical_errors=float(vertical_ok),
-    )
+    return worst_closed, warn_ok, vertical_ok
 
-    # simulation: the payload falls freely and the rope turns vertical at t*
-    fall = free_fall()
+
+def _runs(quick: bool, fall: scenes.Scene) -> list[tuple[str, Model, str, dict[str, Any]]]:
+    """The lanes driven through the free fall: (label, model, method, options)."""
     relaxed = Model(fall.model.mechanism, fall.model.constraints, margin_error=1e-9)
     runs: list[tuple[str, Model, str, dict[str, Any]]] = [
         ("RK45", fall.model, "RK45", {}),
@@ -167,7 +163,11 @@ def case(quick: bool = True) -> Case:
             ("RK45 qp", fall.model, "RK45", dict(solver="qp")),
             ("BDF", fall.model, "BDF", {}),
         ]
-    lanes = {label: _lane(label, mdl, fall, method, options) for label, mdl, method, options in runs}
+    return runs
+
+
+def _lane_features(f: dict[str, float], lanes: dict[str, dict[str, Any]]) -> None:
+    """Each lane's ok, warned, samples beyond t*, error time and wall time into ``f``."""
     for label, lane in lanes.items():
         slug = re.sub(r"[^a-z0-9]+", "_", label.lower()).strip("_")
         f[f"{slug}_ok"] = float(lane["ok"])
@@ -175,17 +175,11 @@ def case(quick: bool = True) -> Case:
         f[f"{slug}_samples_beyond_t_star"] = float(lane["beyond"])
         f[f"{slug}_error_time"] = lane["time"]
         f[f"{slug}_wall_s"] = lane["wall"]
-    good = sum(lane["ok"] for lane in lanes.values())
-    f["runs"] = float(len(runs))
-    f["runs_ok"] = float(good)
-    verdict = worst_closed <= 1e-6 and warn_ok == len(thetas) and vertical_ok == 2 and good == len(runs)
-    observed = (
-        f"Step level: margin = closed form to {fmt(worst_closed)} for θ = 0.3…1e-4, warnings with the time exactly "
-        f"below 1e-6 ({warn_ok}/{len(thetas)}), RealizabilityError at θ = 0 naming constraint, t and margin "
-        f"({vertical_ok}/2). Free fall to the vertical rope (t* = {T_STAR:.6g}), {good}/{len(runs)} lanes right: "
-        + "; ".join(lane["line"] for lane in lanes.values())
-        + "."
-    )
+
+
+def _problems(lanes: dict[str, dict[str, Any]]) -> tuple[list[str], int]:
+    """The problems the lanes show (fixed-step RK4 stepping over t*, other failures, the hint kept out of the
+    exception), and the number of lanes whose hint reaches only Trajectory.message."""
     bad = {label: lane for label, lane in lanes.items() if not lane["ok"]}
     problems = []
     fixed_step = [label for label in bad if label.startswith("rk4")]
@@ -216,5 +210,36 @@ def case(quick: bool = True) -> Case:
             f"it. Lanes: {', '.join(hinted)}. Repro: try: gp.simulate(f.model, f.q0, f.v0, 0.2, dt=1e-3, "
             "method='rk4') except gp.NonFiniteError as e: str(e) vs e.trajectory.message."
         )
-    f["hint_only_in_trajectory_message"] = float(len(hinted))
+    return problems, len(hinted)
+
+
+def case(quick: bool = True) -> Case:
+    """Margin ∝ sin²θ; driven to the vertical rope, every lane must stop at t* and say why."""
+    f: dict[str, float] = {"t_star": T_STAR}
+    thetas = [0.3, 0.1, 0.03, 0.01, 3e-3, 1e-3, 1e-4]
+    worst_closed, warn_ok, vertical_ok = _step_level(thetas)
+    f.update(
+        step_margin_vs_closed_form=worst_closed,
+        step_warnings_correct=float(warn_ok),
+        vertical_errors=float(vertical_ok),
+    )
+
+    # simulation: the payload falls freely and the rope turns vertical at t*
+    fall = free_fall()
+    runs = _runs(quick, fall)
+    lanes = {label: _lane(label, mdl, fall, method, options) for label, mdl, method, options in runs}
+    _lane_features(f, lanes)
+    good = sum(lane["ok"] for lane in lanes.values())
+    f["runs"] = float(len(runs))
+    f["runs_ok"] = float(good)
+    verdict = worst_closed <= 1e-6 and warn_ok == len(thetas) and vertical_ok == 2 and good == len(runs)
+    observed = (
+        f"Step level: margin = closed form to {fmt(worst_closed)} for θ = 0.3…1e-4, warnings with the time exactly "
+        f"below 1e-6 ({warn_ok}/{len(thetas)}), RealizabilityError at θ = 0 naming constraint, t and margin "
+        f"({vertical_ok}/2). Free fall to the vertical rope (t* = {T_STAR:.6g}), {good}/{len(runs)} lanes right: "
+        + "; ".join(lane["line"] for lane in lanes.values())
+        + "."
+    )
+    problems, hinted = _problems(lanes)
+    f["hint_only_in_trajectory_message"] = float(hinted)
     return Case(NAME, WHAT, EXPECTED, observed, bool(verdict), f, tuple(problems))

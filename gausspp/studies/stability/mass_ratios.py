@@ -2,14 +2,16 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
 
 from ... import scenes
 from ...errors import GaussppError
+from ...model.model import Model
 from ...step.problem import StepProblem
-from .common import EPS, Case, fmt, realizability_warnings, recorded, relative, solvers
+from .common import EPS, Case, Solver, fmt, realizability_warnings, recorded, relative, solvers
 
 NAME = "mass ratios"
 WHAT = (
@@ -62,86 +64,128 @@ def exact_acceleration(p: StepProblem) -> np.ndarray:
     return np.array([float(x[0] + y[0]) for x, y in zip(a0, _mul(AinvD, u), strict=True)])
 
 
+@dataclass
+class _Tally:
+    """The worst errors over the steps checked so far, and where they occurred."""
+
+    worst: dict[str, float]
+    worst_over_bound: float = 0.0
+    worst_difference: float = 0.0
+    worst_disagreement: float = 0.0
+    reference_check: float = 0.0
+    largest: float = 0.0
+    worst_at: str = ""
+    largest_at: str = ""
+    max_cond: float = 1.0
+    min_margin: float = 1.0
+    checked: int = 0
+    warned: int = 0
+    failures: list[str] = field(default_factory=list)
+
+    def check_step(
+        self, ways: list[Solver], model: Model, q: np.ndarray, v: np.ndarray, setup: tuple[str, str, float]
+    ) -> np.ndarray:
+        """Step ``model`` at ``(q, v)`` with every solver and tally the errors against the exact acceleration
+        (returned); ``setup`` is (scene name, realization, mass ratio), for the messages."""
+        scene_name, realization, ratio = setup
+        data = model.step_data(0.0, q, v)
+        ref = exact_acceleration(data)
+        cond = float(np.linalg.cond(data.A))
+        bound = EPS * max(cond, 1.0)
+        self.max_cond = max(self.max_cond, cond)
+        results = {}
+        with recorded() as caught:
+            for label, solver, backend in ways:
+                try:
+                    results[label] = model.step(0.0, q, v, solver=solver, backend=backend)
+                except GaussppError as exc:
+                    self.failures.append(f"{scene_name} {realization} ratio {ratio:g} {label}: {exc}")
+        self.warned += len(realizability_warnings(caught))
+        self.checked += 1
+        direct = results.get("direct")
+        for label, res in results.items():
+            err = relative(res.a, ref)
+            self.min_margin = min(self.min_margin, res.margin)
+            self.worst[label] = max(self.worst[label], err)
+            where = f"{label} on {scene_name} ({realization}), mass ratio {ratio:g}, cond(A) = {cond:.1e}"
+            if err > self.largest:
+                self.largest, self.largest_at = err, where
+            if err / bound > self.worst_over_bound:
+                self.worst_over_bound, self.worst_at = err / bound, f"{where}: relative error {fmt(err)}"
+            if direct is not None and label != "direct":
+                self.worst_difference = max(self.worst_difference, relative(res.a, direct.a) / bound)
+                self.worst_disagreement = max(self.worst_disagreement, res.disagreement(direct))
+        return ref
+
+    def check_reference(self, ref: np.ndarray, closed: float) -> None:
+        """Tally the exact acceleration ``ref`` of the two-masses scene against its closed form ``(closed, closed)``."""
+        self.reference_check = max(self.reference_check, relative(ref, np.array([closed, closed])))
+
+
+def _setups(ratio: float) -> list[tuple[str, dict[str, float], str]]:
+    """The scenes at mass ratio ``ratio``: (scene name, parameters, realization)."""
+    return [
+        ("two-masses", dict(m1=1.0, m2=ratio, F=2.0), "ideal"),
+        ("two-masses", dict(m1=1.0, m2=ratio, F=2.0), "servo"),
+        ("stiff-chain", dict(mass_ratio=ratio), "ideal"),
+        ("stiff-chain", dict(mass_ratio=ratio), "servo"),
+    ]
+
+
+def _observed(tally: _Tally, exponents: range) -> str:
+    """What the case saw, in words."""
+    errors = ", ".join(f"{label} {fmt(v)}" for label, v in tally.worst.items())
+    return (
+        f"{tally.checked} steps over mass ratios 1e{min(exponents)}…1e{max(exponents)} (cond(A) up to "
+        f"{tally.max_cond:.0e}, margins down to {tally.min_margin:.1e}): worst relative acceleration errors {errors} "
+        f"(largest: {tally.largest_at}); worst error / (eps·cond A) = {tally.worst_over_bound:.2f} ({tally.worst_at}); "
+        f"QP vs direct at most {tally.worst_difference:.2f}·eps·cond (the library's disagreement(), scaled by the "
+        f"free acceleration as well, at most {fmt(tally.worst_disagreement)}). {len(tally.failures)} step failures, "
+        f"{tally.warned} realizability warnings."
+        + (
+            " The loss comes from the reaction-space formulation: a = a₀ + A⁻¹Du with a₀ = A⁻¹f large when a light "
+            "mass is pushed, then cancelled."
+            if tally.worst_over_bound > 3.0
+            else ""
+        )
+    )
+
+
 def case(quick: bool = True) -> Case:
     """QP ≡ direct and accuracy against an exact solve over mass ratios 1e-6…1e6."""
     exponents = range(-6, 7, 2) if quick else range(-6, 7)
     ways = solvers([None, "casadi:osqp"] + ([] if quick else ["casadi:daqp", "qpsolvers:quadprog"]))
     rng = np.random.default_rng(20261121)
-    worst = {label: 0.0 for label, _, _ in ways}
-    worst_over_bound = worst_difference = worst_disagreement = reference_check = largest = 0.0
-    worst_at = largest_at = ""
-    max_cond, min_margin, checked, warned = 1.0, 1.0, 0, 0
-    failures: list[str] = []
+    tally = _Tally(worst={label: 0.0 for label, _, _ in ways})
     for e in exponents:
         ratio = 10.0**e
-        setups = [
-            ("two-masses", dict(m1=1.0, m2=ratio, F=2.0), "ideal"),
-            ("two-masses", dict(m1=1.0, m2=ratio, F=2.0), "servo"),
-            ("stiff-chain", dict(mass_ratio=ratio), "ideal"),
-            ("stiff-chain", dict(mass_ratio=ratio), "servo"),
-        ]
-        for scene_name, params, realization in setups:
+        for scene_name, params, realization in _setups(ratio):
             scene = scenes.get(scene_name, realization=realization, **params)
             model = scene.model
             states = [(scene.q0, scene.v0)]
             if not quick:
                 states += [(rng.normal(size=model.nq), rng.normal(size=model.nv)) for _ in range(3)]
             for i, (q, v) in enumerate(states):
-                data = model.step_data(0.0, q, v)
-                ref = exact_acceleration(data)
+                ref = tally.check_step(ways, model, q, v, (scene_name, realization, ratio))
                 if scene_name == "two-masses" and i == 0:  # the reference against the closed form
                     closed = 2.0 / (1.0 + ratio) if realization == "ideal" else 2.0 / ratio
-                    reference_check = max(reference_check, relative(ref, np.array([closed, closed])))
-                cond = float(np.linalg.cond(data.A))
-                bound = EPS * max(cond, 1.0)
-                max_cond = max(max_cond, cond)
-                results = {}
-                with recorded() as caught:
-                    for label, solver, backend in ways:
-                        try:
-                            results[label] = model.step(0.0, q, v, solver=solver, backend=backend)
-                        except GaussppError as exc:
-                            failures.append(f"{scene_name} {realization} ratio {ratio:g} {label}: {exc}")
-                warned += len(realizability_warnings(caught))
-                checked += 1
-                direct = results.get("direct")
-                for label, res in results.items():
-                    err = relative(res.a, ref)
-                    min_margin = min(min_margin, res.margin)
-                    worst[label] = max(worst[label], err)
-                    where = f"{label} on {scene_name} ({realization}), mass ratio {ratio:g}, cond(A) = {cond:.1e}"
-                    if err > largest:
-                        largest, largest_at = err, where
-                    if err / bound > worst_over_bound:
-                        worst_over_bound, worst_at = err / bound, f"{where}: relative error {fmt(err)}"
-                    if direct is not None and label != "direct":
-                        worst_difference = max(worst_difference, relative(res.a, direct.a) / bound)
-                        worst_disagreement = max(worst_disagreement, res.disagreement(direct))
-    figures: dict[str, float] = {f"worst_error_{label}": v for label, v in worst.items()}
+                    tally.check_reference(ref, closed)
+    figures: dict[str, float] = {f"worst_error_{label}": v for label, v in tally.worst.items()}
     figures.update(
-        worst_error_over_eps_cond=worst_over_bound,
-        worst_qp_direct_difference_over_eps_cond=worst_difference,
-        worst_library_disagreement=worst_disagreement,
-        reference_vs_closed_form=reference_check,
-        max_cond=max_cond,
-        min_margin=min_margin,
-        steps_checked=float(checked),
-        failures=float(len(failures)),
-        realizability_warnings=float(warned),
+        worst_error_over_eps_cond=tally.worst_over_bound,
+        worst_qp_direct_difference_over_eps_cond=tally.worst_difference,
+        worst_library_disagreement=tally.worst_disagreement,
+        reference_vs_closed_form=tally.reference_check,
+        max_cond=tally.max_cond,
+        min_margin=tally.min_margin,
+        steps_checked=float(tally.checked),
+        failures=float(len(tally.failures)),
+        realizability_warnings=float(tally.warned),
     )
-    verdict = not failures and worst_over_bound <= 10.0 and worst_difference <= 10.0 and reference_check < 1e-14
-    errors = ", ".join(f"{label} {fmt(v)}" for label, v in worst.items())
-    observed = (
-        f"{checked} steps over mass ratios 1e{min(exponents)}…1e{max(exponents)} (cond(A) up to {max_cond:.0e}, "
-        f"margins down to {min_margin:.1e}): worst relative acceleration errors {errors} (largest: {largest_at}); "
-        f"worst error / (eps·cond A) = {worst_over_bound:.2f} ({worst_at}); QP vs direct at most "
-        f"{worst_difference:.2f}·eps·cond (the library's disagreement(), scaled by the free acceleration as well, at "
-        f"most {fmt(worst_disagreement)}). {len(failures)} step failures, {warned} realizability warnings."
-        + (
-            " The loss comes from the reaction-space formulation: a = a₀ + A⁻¹Du with a₀ = A⁻¹f large when a light "
-            "mass is pushed, then cancelled."
-            if worst_over_bound > 3.0
-            else ""
-        )
+    verdict = (
+        not tally.failures
+        and tally.worst_over_bound <= 10.0
+        and tally.worst_difference <= 10.0
+        and tally.reference_check < 1e-14
     )
-    return Case(NAME, WHAT, EXPECTED, observed, bool(verdict), figures, tuple(failures[:3]))
+    return Case(NAME, WHAT, EXPECTED, _observed(tally, exponents), bool(verdict), figures, tuple(tally.failures[:3]))

@@ -10,6 +10,7 @@ from ... import scenes
 from ...errors import GaussppError, InitialDataError
 from ...model.model import Model
 from ...simulation.simulate import simulate
+from ...simulation.trajectory import Trajectory
 from .common import CRANE_G, CRANE_L, CRANE_M, CRANE_M0, CRANE_ROW, Case, recorded
 
 NAME = "initial data off the constraint"
@@ -60,15 +61,19 @@ def _backtracking_projection(model: Model, q: np.ndarray, v: np.ndarray) -> np.n
     return None
 
 
-def case(quick: bool = True) -> Case:
-    """InitialDataError naming the constraint; stabilize='project' starts on it near the data, or fails clearly."""
+Setup = tuple[str, scenes.Scene, np.ndarray, np.ndarray, str, float]
+
+
+def _setups(quick: bool) -> tuple[list[Setup], scenes.Scene]:
+    """The initial data off the constraint: (label, scene, q0, v0, the constraint's name, the value off it);
+    and the two-masses scene (its projection must move only mass 1)."""
     two = scenes.get("two-masses", realization="servo")
     pend = scenes.get("pendulum")
     body = scenes.get("rigid-body-servo", n=(1.0, 0.2, 0.1))
     crane = scenes.get("crane", M0=CRANE_M0, m=CRANE_M, L=CRANE_L, g=CRANE_G)
     l_axis = np.asarray(body.params["l"], float)
     vertical = np.array([crane.q0[0] + CRANE_L * np.sin(crane.q0[1]), 0.0])  # same payload position, rope vertical
-    setups: list[tuple[str, scenes.Scene, np.ndarray, np.ndarray, str, float]] = [
+    setups: list[Setup] = [
         ("two-masses servo, Φ = 0.5", two, two.q0, np.array([0.0, 0.5]), "rod", 0.5),
         ("pendulum, g = 1e-3", pend, pend.q0 + np.array([1e-3, 0.0, 0.0]), pend.v0, "pin-x", 1e-3),
         ("rigid-body servo, Φ = 0.3", body, body.q0, body.v0 + 0.3 * l_axis, "(ω, l) = 0", 0.3),
@@ -84,66 +89,72 @@ def case(quick: bool = True) -> Case:
             ("crane, g = 0.1", crane, crane.q0 + np.array([0.1, 0.0]), crane.v0, CRANE_ROW, 0.1),
             ("crane, g = 1", crane, crane.q0 + np.array([1.0, 0.0]), crane.v0, CRANE_ROW, 1.0),
         ]
-    named, projected, refused = 0, 0, 0
-    notes: list[str] = []
-    far: list[str] = []
-    for label, scene, q0, v0, row, value in setups:
-        options: dict[str, Any] = dict(dt=0.01, method="rk4", solver="direct")
-        with recorded():
-            try:
-                simulate(scene.model, q0, v0, 0.05, **options)
-                notes.append(f"{label}: no InitialDataError")
-            except InitialDataError as exc:
-                msg = str(exc)
-                if repr(row) in msg and "t=0" in msg and f"{value:.3g}" in msg:
-                    named += 1
-                else:
-                    notes.append(f"{label}: InitialDataError without constraint/time/value: {msg}")
-            except GaussppError as exc:
-                notes.append(f"{label}: {type(exc).__name__}: {exc}")
-            try:
-                traj = simulate(scene.model, q0, v0, 0.05, stabilize="project", **options)
-            except InitialDataError as exc:
-                msg = str(exc)
-                if "projecting" in msg and "stabilize='project'" not in msg:
-                    refused += 1
-                else:
-                    notes.append(f"{label}: unclear InitialDataError after projection: {msg[:160]}")
-                continue
-            except GaussppError as exc:
-                notes.append(f"{label}: {type(exc).__name__} after projection: {str(exc)[:160]}")
-                continue
-        start = float(max(np.max(np.abs(traj.g[0])), np.max(np.abs(traj.residual[0]))))
-        moved = float(np.max(np.abs(traj.q[0] - q0)))
-        first = float(np.max(np.abs(_newton_step(scene.model, q0, v0))))
-        if start > 1e-12:  # pragma: no cover - simulate's own check catches this
-            notes.append(f"{label}: starts {start:.2g} off the constraint")
-        elif moved > NEAR * first + 1e-12:
-            near = _backtracking_projection(scene.model, q0, v0)
-            far.append(
-                f"{label}: q0 = {_vec(q0)} projected to {_vec(traj.q[0])} "
-                f"(moved {moved:.2g}, the first Newton step is {first:.2g})"
-                + (
-                    f"; a backtracking Newton from the same data lands at {_vec(near)} "
-                    f"(moved {float(np.max(np.abs(near - q0))):.2g})"
-                    if near is not None
-                    else ""
-                )
+    return setups, two
+
+
+def _named_error(setup: Setup, options: dict[str, Any], notes: list[str]) -> int:
+    """1 if the run without stabilization raises InitialDataError naming the constraint, t=0 and the value;
+    else 0, with a note saying what happened instead."""
+    label, scene, q0, v0, row, value = setup
+    try:
+        simulate(scene.model, q0, v0, 0.05, **options)
+        notes.append(f"{label}: no InitialDataError")
+    except InitialDataError as exc:
+        msg = str(exc)
+        if repr(row) in msg and "t=0" in msg and f"{value:.3g}" in msg:
+            return 1
+        notes.append(f"{label}: InitialDataError without constraint/time/value: {msg}")
+    except GaussppError as exc:
+        notes.append(f"{label}: {type(exc).__name__}: {exc}")
+    return 0
+
+
+def _projected_run(setup: Setup, options: dict[str, Any], notes: list[str]) -> tuple[Trajectory | None, int]:
+    """The run with ``stabilize="project"``, or None and 1 if it fails with an InitialDataError that clearly says
+    the projection failed (None and 0, with a note, for any other failure)."""
+    label, scene, q0, v0, _, _ = setup
+    try:
+        return simulate(scene.model, q0, v0, 0.05, stabilize="project", **options), 0
+    except InitialDataError as exc:
+        msg = str(exc)
+        if "projecting" in msg and "stabilize='project'" not in msg:
+            return None, 1
+        notes.append(f"{label}: unclear InitialDataError after projection: {msg[:160]}")
+    except GaussppError as exc:
+        notes.append(f"{label}: {type(exc).__name__} after projection: {str(exc)[:160]}")
+    return None, 0
+
+
+def _projected_near(setup: Setup, traj: Trajectory, notes: list[str], far: list[str]) -> int:
+    """1 if the projected run starts on the constraint within :data:`NEAR` first Newton steps of the data; else
+    0, with a note (off the constraint) or a line in ``far`` (a far root, and where a backtracking Newton lands)."""
+    label, scene, q0, v0, _, _ = setup
+    start = float(max(np.max(np.abs(traj.g[0])), np.max(np.abs(traj.residual[0]))))
+    moved = float(np.max(np.abs(traj.q[0] - q0)))
+    first = float(np.max(np.abs(_newton_step(scene.model, q0, v0))))
+    if start > 1e-12:  # pragma: no cover - simulate's own check catches this
+        notes.append(f"{label}: starts {start:.2g} off the constraint")
+    elif moved > NEAR * first + 1e-12:
+        near = _backtracking_projection(scene.model, q0, v0)
+        far.append(
+            f"{label}: q0 = {_vec(q0)} projected to {_vec(traj.q[0])} "
+            f"(moved {moved:.2g}, the first Newton step is {first:.2g})"
+            + (
+                f"; a backtracking Newton from the same data lands at {_vec(near)} "
+                f"(moved {float(np.max(np.abs(near - q0))):.2g})"
+                if near is not None
+                else ""
             )
-        else:
-            projected += 1
-        if scene is two and not np.allclose(traj.v[0], [0.5, 0.5], rtol=0, atol=1e-15):
-            notes.append(f"{label}: projected to v = {traj.v[0]}, not along A⁻¹D = (1/m1, 0)")
-    f = {
-        "setups": float(len(setups)),
-        "named_errors": float(named),
-        "projected_near": float(projected),
-        "projection_refused_clearly": float(refused),
-        "projected_far": float(len(far)),
-    }
-    verdict = named == len(setups) and projected + refused == len(setups) and not far and not notes
-    observed = (
-        f"Without stabilization {named}/{len(setups)} setups raise InitialDataError naming the constraint, t=0 and "
+        )
+    else:
+        return 1
+    return 0
+
+
+def _observed(n: int, named: int, projected: int, refused: int, far: list[str], notes: list[str]) -> str:
+    """What the case saw, in words, for ``n`` setups."""
+    return (
+        f"Without stabilization {named}/{n} setups raise InitialDataError naming the constraint, t=0 and "
         f"the value. With stabilize='project' {projected} start on the constraint (≤ 1e-12) within {NEAR:g} first "
         "Newton steps of the data (the two-masses servo moves only mass 1, along A⁻¹D), and "
         f"{refused} end in an InitialDataError saying the projection failed (the singular vertical rope: NaN; far "
@@ -152,15 +163,46 @@ def case(quick: bool = True) -> Case:
         + "."
         + (" Other: " + "; ".join(notes) + "." if notes else "")
     )
-    problems = []
-    if far:
-        problems.append(
-            "stabilize='project' accepts a far root: the undamped Newton iteration of the initial projection "
-            "(drift.projection_function, repeated by simulate._project_initial until |g|, |Φ| are small) can jump "
-            "to a point on the constraint arbitrarily far from the data and start there without a word — "
-            + "; ".join(far)
-            + ". Right: damp the Newton steps (or bound |Δq|) and raise InitialDataError when no point within a few "
-            "steps is found. Repro: c = gp.scenes.get('crane'); gp.simulate(c.model, c.q0 + [0.3, 0], c.v0, 0.05, "
-            "dt=0.01, stabilize='project').q[0]."
-        )
+
+
+def _far_root_problem(far: list[str]) -> str:
+    """The problem report for projections that land on a far root."""
+    return (
+        "stabilize='project' accepts a far root: the undamped Newton iteration of the initial projection "
+        "(drift.projection_function, repeated by simulate._project_initial until |g|, |Φ| are small) can jump "
+        "to a point on the constraint arbitrarily far from the data and start there without a word — "
+        + "; ".join(far)
+        + ". Right: damp the Newton steps (or bound |Δq|) and raise InitialDataError when no point within a few "
+        "steps is found. Repro: c = gp.scenes.get('crane'); gp.simulate(c.model, c.q0 + [0.3, 0], c.v0, 0.05, "
+        "dt=0.01, stabilize='project').q[0]."
+    )
+
+
+def case(quick: bool = True) -> Case:
+    """InitialDataError naming the constraint; stabilize='project' starts on it near the data, or fails clearly."""
+    setups, two = _setups(quick)
+    named, projected, refused = 0, 0, 0
+    notes: list[str] = []
+    far: list[str] = []
+    for setup in setups:
+        options: dict[str, Any] = dict(dt=0.01, method="rk4", solver="direct")
+        with recorded():
+            named += _named_error(setup, options, notes)
+            traj, clear = _projected_run(setup, options, notes)
+        if traj is None:
+            refused += clear
+            continue
+        projected += _projected_near(setup, traj, notes, far)
+        if setup[1] is two and not np.allclose(traj.v[0], [0.5, 0.5], rtol=0, atol=1e-15):
+            notes.append(f"{setup[0]}: projected to v = {traj.v[0]}, not along A⁻¹D = (1/m1, 0)")
+    f = {
+        "setups": float(len(setups)),
+        "named_errors": float(named),
+        "projected_near": float(projected),
+        "projection_refused_clearly": float(refused),
+        "projected_far": float(len(far)),
+    }
+    verdict = named == len(setups) and projected + refused == len(setups) and not far and not notes
+    observed = _observed(len(setups), named, projected, refused, far, notes)
+    problems = [_far_root_problem(far)] if far else []
     return Case(NAME, WHAT, EXPECTED, observed, bool(verdict), f, tuple(problems + notes[:2]))
