@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import ShapeError
 from ..step.expressions import StepExpressions
 from ..step.protocol import ContactExpressions, Group
+from .constraint_expressions import ConstraintExpressions
 from .constraints import Constraint, Unilateral
 from .mechanism import Mechanism
 
@@ -73,40 +74,17 @@ def assemble(mech: Mechanism, constraints: Sequence[Constraint], names: Sequence
             lam_at += k
             lam0_parts.append(_lam0_of(real.lam0, k, name))
             lam_cols += list(range(col, col + k))  # u = λ̇ for these
-        reaction = real.reaction(mech, e, lam_c)
-        if reaction.D.size1() != mech.nv:
-            raise ShapeError(
-                f"constraint {name!r}: reaction directions D have shape {reaction.D.shape}, expected ({mech.nv}, m)"
-            )
-        Ds.append(reaction.D)
-        bounds.append(real.bounds_for(reaction.D.size2()))
-        r0 = r0 + reaction.r0
-        groups.append(Group(name, slice(row, row + k), slice(col, col + reaction.D.size2()), real.hint, real.label))
+        D, r0_c, group = _reaction_block(mech, c, e, lam_c, name, slice(row, row + k), col)
+        Ds.append(D)
+        bounds.append(real.bounds_for(D.size2()))
+        r0 = r0 + r0_c
+        groups.append(group)
         row_names += _row_names(name, k)
-        row, col = row + k, col + reaction.D.size2()
+        row, col = row + k, col + D.size2()
     known = [p for p in lam0_parts if p is not None]
-    Phi = ca.vertcat(ca.SX(0, 1), *[e.Phi for e in exprs])
-    g = ca.vertcat(
-        ca.SX(0, 1), *[e.g if e.g is not None else ca.SX.zeros(k) for e, k in zip(exprs, sizes, strict=True)]
-    )
     starts = np.cumsum([0, *sizes])
-    # Baumgarte terms (docs/theory.md §5): J q̈ = φ − α Φ − β g, with (α, β) an input (zero: the exact step)
-    expressions = StepExpressions(
-        A=mech.A,
-        f=mech.f,
-        r0=r0,
-        J=ca.vertcat(ca.SX(0, mech.nv), *[e.J for e in exprs]),
-        phi=ca.vertcat(ca.SX(0, 1), *[e.phi for e in exprs]) - stab[0] * Phi - stab[1] * g,
-        D=ca.horzcat(ca.SX(mech.nv, 0), *Ds),
-        Phi=Phi,
-        v=mech.v,
-        qdot=mech.qdot,
-        energy=mech.energy,
-        F_nc=mech.F_nc,
-        g=g,
-    )
     return Assembly(
-        expressions=expressions,
+        expressions=_stacked(mech, exprs, sizes, r0, Ds, stab),
         inputs=[mech.t, mech.q, mech.v, lam, stab],
         k=row,
         m=col,
@@ -119,6 +97,48 @@ def assemble(mech: Mechanism, constraints: Sequence[Constraint], names: Sequence
             i for e, k, at in zip(exprs, sizes, starts, strict=False) if e.g is not None for i in range(at, at + k)
         ],
         lam0=None if len(known) < len(lam0_parts) else np.concatenate([np.zeros(0), *known]),
+    )
+
+
+def _reaction_block(
+    mech: Mechanism, c: Constraint, e: ConstraintExpressions, lam_c: ca.SX, name: str, rows: slice, col: int
+) -> tuple[ca.SX, ca.SX, Group]:
+    """One constraint's reaction ``r₀ + D u`` from its realization and its :class:`Group` (columns from ``col``)."""
+    real = c.realization
+    reaction = real.reaction(mech, e, lam_c)
+    if reaction.D.size1() != mech.nv:
+        raise ShapeError(
+            f"constraint {name!r}: reaction directions D have shape {reaction.D.shape}, expected ({mech.nv}, m)"
+        )
+    group = Group(name, rows, slice(col, col + reaction.D.size2()), real.hint, real.label)
+    return reaction.D, reaction.r0, group
+
+
+def _stacked(
+    mech: Mechanism, exprs: list[ConstraintExpressions], sizes: list[int], r0: ca.SX, Ds: list[ca.SX], stab: ca.SX
+) -> StepExpressions:
+    """The step's expressions: the rows of ``J``, ``φ``, ``Φ``, ``g`` stacked, the columns of ``D`` side by side.
+
+    Baumgarte terms (docs/theory.md §5): ``J q̈ = φ − α Φ − β g``, with ``(α, β) = stab`` an input (zero: the
+    exact step).
+    """
+    Phi = ca.vertcat(ca.SX(0, 1), *[e.Phi for e in exprs])
+    g = ca.vertcat(
+        ca.SX(0, 1), *[e.g if e.g is not None else ca.SX.zeros(k) for e, k in zip(exprs, sizes, strict=True)]
+    )
+    return StepExpressions(
+        A=mech.A,
+        f=mech.f,
+        r0=r0,
+        J=ca.vertcat(ca.SX(0, mech.nv), *[e.J for e in exprs]),
+        phi=ca.vertcat(ca.SX(0, 1), *[e.phi for e in exprs]) - stab[0] * Phi - stab[1] * g,
+        D=ca.horzcat(ca.SX(mech.nv, 0), *Ds),
+        Phi=Phi,
+        v=mech.v,
+        qdot=mech.qdot,
+        energy=mech.energy,
+        F_nc=mech.F_nc,
+        g=g,
     )
 
 

@@ -18,6 +18,8 @@ that motion (the rest of the Zeno sequence included). With a tilt the block rock
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import casadi as ca
 import numpy as np
 
@@ -49,6 +51,28 @@ def build(
     t_end: float = 3.0,
 ) -> Scene:
     """Planar block dropped on a floor: its corners bounce with restitution e, then it rests."""
+    _check(m, w, h, g, e, drop, tilt, t_end)
+    model = _block(m, w, h, g, e)
+    # the lower corner starts `drop` above the floor
+    z0 = drop + 0.5 * w * abs(np.sin(tilt)) + 0.5 * h * np.cos(tilt)
+    q0, v0 = np.array([0.0, z0, tilt]), np.array([vx, 0.0, 0.0])
+    exact = _bouncing(h, g, e, drop, vx, z0) if tilt == 0.0 else None
+    return Scene(
+        name="block-on-floor",
+        model=model,
+        q0=q0,
+        v0=v0,
+        lam0=None,
+        t_end=t_end,
+        exact=exact,
+        description="planar block dropped on a floor: four unilateral corner contacts, impacts with restitution e, "
+        "then rest",
+        params=dict(m=m, w=w, h=h, g=g, e=e, drop=drop, tilt=tilt, vx=vx, t_end=t_end),
+    )
+
+
+def _check(m: float, w: float, h: float, g: float, e: float, drop: float, tilt: float, t_end: float) -> None:
+    """Positive sizes, mass and gravity; ``0 ≤ e ≤ 1``; ``drop ≥ 0``, ``t_end > 0``; ``|tilt| < π/2``."""
     if not (m > 0 and w > 0 and h > 0 and g > 0):
         raise InputError(f"block-on-floor: m, w, h and g must be positive, got m={m}, w={w}, h={h}, g={g}")
     if not 0 <= e <= 1:
@@ -57,6 +81,10 @@ def build(
         raise InputError(f"block-on-floor: need drop ≥ 0 and t_end > 0, got drop={drop}, t_end={t_end}")
     if not abs(tilt) < np.pi / 2:
         raise InputError(f"block-on-floor: |tilt| must be below π/2, got {tilt}")
+
+
+def _block(m: float, w: float, h: float, g: float, e: float) -> Model:
+    """The block ``q = (x, z, φ)`` under gravity with a unilateral contact at each of its four corners."""
     inertia = m * (w * w + h * h) / 12.0
     body = Lagrangian(
         n=3,
@@ -72,40 +100,31 @@ def build(
         )
         for s, u, name in ((1.0, -1.0, "corner+"), (-1.0, -1.0, "corner-"), (1.0, 1.0, "top+"), (-1.0, 1.0, "top-"))
     ]
-    model = Model(body, corners)
-    # the lower corner starts `drop` above the floor
-    z0 = drop + 0.5 * w * abs(np.sin(tilt)) + 0.5 * h * np.cos(tilt)
-    q0, v0 = np.array([0.0, z0, tilt]), np.array([vx, 0.0, 0.0])
-    exact = None
-    if tilt == 0.0:
-        v1 = np.sqrt(2.0 * g * drop)
-        t_inf = np.sqrt(2.0 * drop / g) + (2.0 * e * v1 / (g * (1.0 - e)) if e < 1 else np.inf)
+    return Model(body, corners)
 
-        def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
-            t = float(t)
-            z0_ = 0.5 * h
-            if t >= t_inf:
-                return np.array([vx * t, z0_, 0.0]), np.array([vx, 0.0, 0.0])
-            t1 = np.sqrt(2.0 * drop / g)
-            if t < t1:
-                return np.array([vx * t, z0 - 0.5 * g * t * t, 0.0]), np.array([vx, -g * t, 0.0])
-            start, k = t1, 1
-            while True:  # flight k starts at impact k with upward speed e^k v1
-                up = e**k * v1
-                if t < start + 2.0 * up / g or up == 0.0:
-                    s = t - start
-                    return np.array([vx * t, z0_ + up * s - 0.5 * g * s * s, 0.0]), np.array([vx, up - g * s, 0.0])
-                start, k = start + 2.0 * up / g, k + 1
 
-    return Scene(
-        name="block-on-floor",
-        model=model,
-        q0=q0,
-        v0=v0,
-        lam0=None,
-        t_end=t_end,
-        exact=exact,
-        description="planar block dropped on a floor: four unilateral corner contacts, impacts with restitution e, "
-        "then rest",
-        params=dict(m=m, w=w, h=h, g=g, e=e, drop=drop, tilt=tilt, vx=vx, t_end=t_end),
-    )
+def _bouncing(
+    h: float, g: float, e: float, drop: float, vx: float, z0: float
+) -> Callable[[float], tuple[np.ndarray, np.ndarray]]:
+    """The level block's motion: a fall from ``z0``, flights of upward speed ``eᵏ v1`` after impact ``k``,
+    rest at ``z = h/2`` from ``t∞`` (the sum of the flights) on."""
+    v1 = np.sqrt(2.0 * g * drop)
+    t_inf = np.sqrt(2.0 * drop / g) + (2.0 * e * v1 / (g * (1.0 - e)) if e < 1 else np.inf)
+
+    def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
+        t = float(t)
+        z0_ = 0.5 * h
+        if t >= t_inf:
+            return np.array([vx * t, z0_, 0.0]), np.array([vx, 0.0, 0.0])
+        t1 = np.sqrt(2.0 * drop / g)
+        if t < t1:
+            return np.array([vx * t, z0 - 0.5 * g * t * t, 0.0]), np.array([vx, -g * t, 0.0])
+        start, k = t1, 1
+        while True:  # flight k starts at impact k with upward speed e^k v1
+            up = e**k * v1
+            if t < start + 2.0 * up / g or up == 0.0:
+                s = t - start
+                return np.array([vx * t, z0_ + up * s - 0.5 * g * s * s, 0.0]), np.array([vx, up - g * s, 0.0])
+            start, k = start + 2.0 * up / g, k + 1
+
+    return exact

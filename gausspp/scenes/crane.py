@@ -80,7 +80,7 @@ def free_fall(t: float, L: float, g: float, theta0: float) -> tuple[np.ndarray, 
     return np.array([-L * np.sin(th), th]), np.array([-L * np.cos(th) * thdot, thdot])
 
 
-def _sigma(tau: Any) -> Any:
+def rest_to_rest(tau: Any) -> Any:
     """Septic rest-to-rest profile from 0 to 1 on ``[0, 1]`` (zero velocity, acceleration and jerk at both ends)."""
     return tau**4 * (35 - 84 * tau + 70 * tau**2 - 20 * tau**3)
 
@@ -94,7 +94,7 @@ def motion(accel: float, distance: float, duration: float) -> Callable[[Any], An
             tau = ca.fmin(ca.fmax(t / duration, 0), 1)
         else:
             tau = np.clip(np.asarray(t, float) / duration, 0.0, 1.0)
-        return 0.5 * accel * t**2 + distance * _sigma(tau)
+        return 0.5 * accel * t**2 + distance * rest_to_rest(tau)
 
     return s
 
@@ -117,39 +117,13 @@ def build(
     ``accel`` is the base acceleration of the payload (default ``−g tan theta0``, which holds the
     rope at ``theta0``), ``distance``/``duration`` an extra smooth rest-to-rest move.
     """
-    for name, value in (("M0", M0), ("m", m), ("L", L), ("duration", duration)):
-        if not (np.isfinite(value) and value > 0):
-            raise InputError(f"crane: {name} must be positive and finite, got {value}")
-    for name, value in (("g", g), ("theta0", theta0), ("distance", distance), ("t_end", t_end)):
-        if not np.isfinite(value):
-            raise InputError(f"crane: {name} must be finite, got {value}")
+    _check(M0, m, L, g, theta0, distance, duration, t_end)
     if accel is None:
         accel = -g * float(np.tan(theta0))
-    s = motion(float(accel), float(distance), float(duration))
-    body = Lagrangian(
-        n=2,
-        T=lambda q, v, t: 0.5 * (M0 + m) * v[0] ** 2 + m * L * ca.cos(q[1]) * v[0] * v[1] + 0.5 * m * L**2 * v[1] ** 2,
-        V=lambda q, t: -m * g * L * ca.cos(q[1]),
-    )
-    servo = Holonomic(
-        lambda q, t: q[0] + L * ca.sin(q[1]) - s(t),
-        name="payload follows s(t)",
-        realization=Force(M=lambda q, v, t: [1, 0]),
-    )
-    model = Model(body, [servo])
+    model = _crane(M0, m, L, g, motion(float(accel), float(distance), float(duration)))
     q0 = np.array([-L * np.sin(theta0), float(theta0)])
     v0 = np.array([0.0, 0.0])  # ṡ(0) = 0 for every accel, distance
-    exact: Callable[[float], tuple[np.ndarray, np.ndarray]] | None = None
-    if distance == 0.0 and accel == -g * np.tan(theta0):  # steady: the rope stays at θ0
-
-        def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
-            return np.array([0.5 * accel * t**2 - L * np.sin(theta0), theta0]), np.array([accel * t, 0.0])
-
-    elif distance == 0.0 and accel == 0.0:  # s ≡ 0: no tension, the payload falls freely
-
-        def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
-            return free_fall(t, L, g, theta0)
-
+    exact = _exact(accel, distance, L, g, theta0)
     return Scene(
         name="crane",
         model=model,
@@ -163,3 +137,48 @@ def build(
             M0=M0, m=m, L=L, g=g, theta0=theta0, accel=accel, distance=distance, duration=duration, t_end=t_end
         ),
     )
+
+
+def _check(
+    M0: float, m: float, L: float, g: float, theta0: float, distance: float, duration: float, t_end: float
+) -> None:
+    """Positive finite masses, length and duration; finite ``g``, ``theta0``, ``distance``, ``t_end``."""
+    for name, value in (("M0", M0), ("m", m), ("L", L), ("duration", duration)):
+        if not (np.isfinite(value) and value > 0):
+            raise InputError(f"crane: {name} must be positive and finite, got {value}")
+    for name, value in (("g", g), ("theta0", theta0), ("distance", distance), ("t_end", t_end)):
+        if not np.isfinite(value):
+            raise InputError(f"crane: {name} must be finite, got {value}")
+
+
+def _crane(M0: float, m: float, L: float, g: float, s: Callable[[Any], Any]) -> Model:
+    """Trolley ``x``, rope angle ``θ``; the trolley force makes the payload's position ``x + L sin θ`` follow ``s``."""
+    body = Lagrangian(
+        n=2,
+        T=lambda q, v, t: 0.5 * (M0 + m) * v[0] ** 2 + m * L * ca.cos(q[1]) * v[0] * v[1] + 0.5 * m * L**2 * v[1] ** 2,
+        V=lambda q, t: -m * g * L * ca.cos(q[1]),
+    )
+    servo = Holonomic(
+        lambda q, t: q[0] + L * ca.sin(q[1]) - s(t),
+        name="payload follows s(t)",
+        realization=Force(M=lambda q, v, t: [1, 0]),
+    )
+    return Model(body, [servo])
+
+
+def _exact(
+    accel: float, distance: float, L: float, g: float, theta0: float
+) -> Callable[[float], tuple[np.ndarray, np.ndarray]] | None:
+    """The closed-form motion where there is one: steady at ``θ0``, or a free fall for ``s ≡ 0``; else ``None``."""
+    exact: Callable[[float], tuple[np.ndarray, np.ndarray]] | None = None
+    if distance == 0.0 and accel == -g * np.tan(theta0):  # steady: the rope stays at θ0
+
+        def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
+            return np.array([0.5 * accel * t**2 - L * np.sin(theta0), theta0]), np.array([accel * t, 0.0])
+
+    elif distance == 0.0 and accel == 0.0:  # s ≡ 0: no tension, the payload falls freely
+
+        def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
+            return free_fall(t, L, g, theta0)
+
+    return exact

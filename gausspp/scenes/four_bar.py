@@ -106,53 +106,9 @@ def build(
     is ``"oblique"`` (the closure along ``(cos alpha, sin alpha)``) or ``"distance"`` (the rocker's
     length ``|C − P| = l3``).
     """
-    if not isinstance(redundant, (bool, np.bool_)):
-        raise InputError(f"four-bar-redundant: redundant must be True or False, got {redundant!r}")
-    if third_row not in THIRD_ROWS:
-        raise UnknownNameError(f"four-bar-redundant: third_row={third_row!r} is unknown; use one of {list(THIRD_ROWS)}")
-    for name, value in (("l0", l0), ("l1", l1), ("l2", l2), ("l3", l3), ("rho", rho), ("t_end", t_end)):
-        if not (isinstance(value, (int, float, np.floating, np.integer)) and np.isfinite(value) and value > 0):
-            raise InputError(f"four-bar-redundant: {name} must be positive and finite, got {value!r}")
-    for name, value in (("alpha", alpha), ("g", g), ("theta0", theta0), ("omega0", omega0)):
-        if not (isinstance(value, (int, float, np.floating, np.integer)) and np.isfinite(value)):
-            raise InputError(f"four-bar-redundant: {name} must be a finite number, got {value!r}")
+    _check(redundant, third_row, alpha, l0, l1, l2, l3, rho, g, theta0, omega0, t_end)
     lengths = (float(l1), float(l2), float(l3))
-    masses = tuple(rho * li for li in lengths)
-    inertias = tuple(mi * li**2 / 12.0 for mi, li in zip(masses, lengths, strict=True))
-
-    def centres(q: Any) -> list[Any]:
-        p1, p2, p3 = absolute_angles(q)
-        B = l1 * _e(p1)
-        C = B + l2 * _e(p2)
-        return [0.5 * l1 * _e(p1), B + 0.5 * l2 * _e(p2), C + 0.5 * l3 * _e(p3)]
-
-    def kinetic(q: Any, v: Any, t: Any) -> Any:
-        T = 0
-        rates = (v[0], v[0] + v[1], v[0] + v[1] + v[2])
-        for c, mi, Ii, w in zip(centres(q), masses, inertias, rates, strict=True):
-            vc = ca.jacobian(c, q) @ v
-            T = T + 0.5 * mi * ca.dot(vc, vc) + 0.5 * Ii * w**2
-        return T
-
-    def potential(q: Any, t: Any) -> Any:
-        return g * sum(mi * c[1] for c, mi in zip(centres(q), masses, strict=True))
-
-    def closure(q: Any, t: Any) -> Any:
-        p1, p2, p3 = absolute_angles(q)
-        return l1 * _e(p1) + l2 * _e(p2) + l3 * _e(p3) - ca.vertcat(l0, 0)
-
-    def third(q: Any, t: Any) -> Any:
-        if third_row == "oblique":
-            return ca.dot(ca.vertcat(np.cos(alpha), np.sin(alpha)), closure(q, t))
-        p1, p2, _ = absolute_angles(q)
-        CP = l1 * _e(p1) + l2 * _e(p2) - ca.vertcat(l0, 0)
-        return ca.dot(CP, CP) - l3**2
-
-    body = Lagrangian(n=3, T=kinetic, V=potential)
-    constraints = [Holonomic(closure, name="closure")]
-    if redundant:
-        constraints.append(Holonomic(third, name=f"closure ({third_row})"))
-    model = Model(body, constraints)
+    model = Model(_bars(lengths, rho, g), _loop(redundant, third_row, alpha, l0, lengths))
     q0, v0 = assemble(float(theta0), float(omega0), float(l0), *lengths)
     name = "four-bar-redundant"
     return Scene(
@@ -182,3 +138,79 @@ def build(
             t_end=t_end,
         ),
     )
+
+
+def _check(
+    redundant: Any,
+    third_row: str,
+    alpha: float,
+    l0: float,
+    l1: float,
+    l2: float,
+    l3: float,
+    rho: float,
+    g: float,
+    theta0: float,
+    omega0: float,
+    t_end: float,
+) -> None:
+    """The parameters checked: a boolean, a known third row, positive lengths, finite numbers."""
+    if not isinstance(redundant, (bool, np.bool_)):
+        raise InputError(f"four-bar-redundant: redundant must be True or False, got {redundant!r}")
+    if third_row not in THIRD_ROWS:
+        raise UnknownNameError(f"four-bar-redundant: third_row={third_row!r} is unknown; use one of {list(THIRD_ROWS)}")
+    for name, value in (("l0", l0), ("l1", l1), ("l2", l2), ("l3", l3), ("rho", rho), ("t_end", t_end)):
+        if not (isinstance(value, (int, float, np.floating, np.integer)) and np.isfinite(value) and value > 0):
+            raise InputError(f"four-bar-redundant: {name} must be positive and finite, got {value!r}")
+    for name, value in (("alpha", alpha), ("g", g), ("theta0", theta0), ("omega0", omega0)):
+        if not (isinstance(value, (int, float, np.floating, np.integer)) and np.isfinite(value)):
+            raise InputError(f"four-bar-redundant: {name} must be a finite number, got {value!r}")
+
+
+def _bars(lengths: tuple[float, float, float], rho: float, g: float) -> Lagrangian:
+    """Crank, coupler and rocker: uniform bars of mass ``ρ lᵢ``, moment ``ρ lᵢ³/12``, under gravity."""
+    l1, l2, l3 = lengths
+    masses = tuple(rho * li for li in lengths)
+    inertias = tuple(mi * li**2 / 12.0 for mi, li in zip(masses, lengths, strict=True))
+
+    def centres(q: Any) -> list[Any]:
+        p1, p2, p3 = absolute_angles(q)
+        B = l1 * _e(p1)
+        C = B + l2 * _e(p2)
+        return [0.5 * l1 * _e(p1), B + 0.5 * l2 * _e(p2), C + 0.5 * l3 * _e(p3)]
+
+    def kinetic(q: Any, v: Any, t: Any) -> Any:
+        T = 0
+        rates = (v[0], v[0] + v[1], v[0] + v[1] + v[2])
+        for c, mi, Ii, w in zip(centres(q), masses, inertias, rates, strict=True):
+            vc = ca.jacobian(c, q) @ v
+            T = T + 0.5 * mi * ca.dot(vc, vc) + 0.5 * Ii * w**2
+        return T
+
+    def potential(q: Any, t: Any) -> Any:
+        return g * sum(mi * c[1] for c, mi in zip(centres(q), masses, strict=True))
+
+    return Lagrangian(n=3, T=kinetic, V=potential)
+
+
+def _loop(
+    redundant: bool, third_row: str, alpha: float, l0: float, lengths: tuple[float, float, float]
+) -> list[Holonomic]:
+    """The closure's two rows and, if ``redundant``, the third row that they imply."""
+    l1, l2, l3 = lengths
+
+    def closure(q: Any, t: Any) -> Any:
+        p1, p2, p3 = absolute_angles(q)
+        return l1 * _e(p1) + l2 * _e(p2) + l3 * _e(p3) - ca.vertcat(l0, 0)
+
+    def third(q: Any, t: Any) -> Any:
+        if third_row == "oblique":
+            return ca.dot(ca.vertcat(np.cos(alpha), np.sin(alpha)), closure(q, t))
+        p1, p2, _ = absolute_angles(q)
+        CP = l1 * _e(p1) + l2 * _e(p2) - ca.vertcat(l0, 0)
+        return ca.dot(CP, CP) - l3**2
+
+    constraints = [Holonomic(closure, name="closure")]
+    if redundant:
+        constraints.append(Holonomic(third, name=f"closure ({third_row})"))
+    return constraints

@@ -64,6 +64,34 @@ def build(
         raise InputError(f"gyrostat-extended: rotor_inertia must be positive, got {rotor_inertia!r}")
     l_ = unit_vector("gyrostat-extended", "l", l)
     n_ = l_ if n is None else unit_vector("gyrostat-extended", "n", n)
+    body = _body(I, Jr, n_)
+    motor = Force(M=lambda q, v, t: [0, 0, 0, 1])
+    model = Model(body, [Constraint(lambda q, v, t: ca.dot(v[:3], ca.DM(l_)), name="(ω, l) = 0", realization=motor)])
+    w0 = on_plane("gyrostat-extended", omega0, l_)
+    theta_dot0 = float(lam0) / Jr - float(w0 @ n_)
+    return Scene(
+        name="gyrostat-extended",
+        model=model,
+        q0=np.array([1.0, 0.0, 0.0, 0.0, float(theta0)]),
+        v0=np.append(w0, theta_dot0),
+        lam0=None,
+        t_end=t_end,
+        exact=None,
+        description="gyrostat with the rotor angle as a coordinate, motor torque as Béghin servo keeping (ω, l) = 0",
+        params=dict(
+            inertia=I.tolist(),
+            rotor_inertia=Jr,
+            n=n_.tolist(),
+            l=l_.tolist(),
+            lam0=float(lam0),
+            theta0=float(theta0),
+            t_end=t_end,
+        ),
+    )
+
+
+def _body(I: np.ndarray, Jr: float, n_: np.ndarray) -> MassMatrix:
+    """Carrier and rotor: ``v = (ω, θ̇)``, the rotor's momentum ``λ = J_r (n·ω + θ̇)`` along ``n``, Euler's equations."""
     Id, nd = ca.DM(I), ca.DM(n_)
 
     def mass_matrix(q: ca.SX, t: ca.SX) -> ca.SX:
@@ -87,38 +115,17 @@ def build(
         w = v[:3]
         return 0.5 * ca.dot(w, Id @ w) + 0.5 * Jr * (ca.dot(nd, w) + v[3]) ** 2
 
-    def kinematics(q: ca.SX, v: ca.SX, t: ca.SX) -> ca.SX:
-        pw, px, py, pz = q[0], q[1], q[2], q[3]
-        w = v[:3]
-        return ca.vertcat(  # ½ q ⊗ (0, ω), then θ̇
-            0.5 * (-px * w[0] - py * w[1] - pz * w[2]),
-            0.5 * (pw * w[0] + py * w[2] - pz * w[1]),
-            0.5 * (pw * w[1] + pz * w[0] - px * w[2]),
-            0.5 * (pw * w[2] + px * w[1] - py * w[0]),
-            v[3],
-        )
+    return MassMatrix(n=4, A=mass_matrix, f=forces, energy=energy, kinematics=_kinematics, nq=5)
 
-    body = MassMatrix(n=4, A=mass_matrix, f=forces, energy=energy, kinematics=kinematics, nq=5)
-    motor = Force(M=lambda q, v, t: [0, 0, 0, 1])
-    model = Model(body, [Constraint(lambda q, v, t: ca.dot(v[:3], ca.DM(l_)), name="(ω, l) = 0", realization=motor)])
-    w0 = on_plane("gyrostat-extended", omega0, l_)
-    theta_dot0 = float(lam0) / Jr - float(w0 @ n_)
-    return Scene(
-        name="gyrostat-extended",
-        model=model,
-        q0=np.array([1.0, 0.0, 0.0, 0.0, float(theta0)]),
-        v0=np.append(w0, theta_dot0),
-        lam0=None,
-        t_end=t_end,
-        exact=None,
-        description="gyrostat with the rotor angle as a coordinate, motor torque as Béghin servo keeping (ω, l) = 0",
-        params=dict(
-            inertia=I.tolist(),
-            rotor_inertia=Jr,
-            n=n_.tolist(),
-            l=l_.tolist(),
-            lam0=float(lam0),
-            theta0=float(theta0),
-            t_end=t_end,
-        ),
+
+def _kinematics(q: ca.SX, v: ca.SX, t: ca.SX) -> ca.SX:
+    """``q̇``: the quaternion's rate ``½ q ⊗ (0, ω)`` and the rotor angle's ``θ̇``."""
+    pw, px, py, pz = q[0], q[1], q[2], q[3]
+    w = v[:3]
+    return ca.vertcat(  # ½ q ⊗ (0, ω), then θ̇
+        0.5 * (-px * w[0] - py * w[1] - pz * w[2]),
+        0.5 * (pw * w[0] + py * w[2] - pz * w[1]),
+        0.5 * (pw * w[1] + pz * w[0] - px * w[2]),
+        0.5 * (pw * w[2] + px * w[1] - py * w[0]),
+        v[3],
     )

@@ -21,7 +21,7 @@ excited, and a stiff method may step over it while an explicit one must resolve 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -56,73 +56,22 @@ def build(
     t_end: float = 10.0,
 ) -> Scene:
     """Chain of masses on soft and stiff springs (stiffness ratio 1e6 by default), lever constraint (ideal or servo)."""
-    if realization not in REALIZATIONS:
-        raise UnknownNameError(f"stiff-chain: realization={realization!r} is unknown; use one of {list(REALIZATIONS)}")
-    if not isinstance(n, (int, np.integer)) or n < 3:
-        raise InputError(f"stiff-chain: need n ≥ 3 masses (a spring to the wall, the lever on the last two), got {n!r}")
-    if not (stiffness_ratio > 0 and mass_ratio > 0 and k > 0):
-        raise InputError(
-            f"stiff-chain: stiffness_ratio, mass_ratio and k must be positive, got {stiffness_ratio}, {mass_ratio}, {k}"
-        )
-    stiff = sorted({int(s) for s in stiff})
-    if any(not 0 <= s < n for s in stiff):
-        raise InputError(f"stiff-chain: stiff springs must be indices in 0…{n - 1}, got {stiff}")
+    stiff = _checked(n, stiffness_ratio, mass_ratio, stiff, realization, k)
     n = int(n)
     masses = float(mass_ratio) ** (np.arange(n) / (n - 1))
     springs = np.full(n, float(k))
     springs[stiff] *= stiffness_ratio
     E_all = _extension_rows(n, range(n))
     K = E_all.T @ (springs[:, None] * E_all)
-
-    def V(q, t):  # noqa: ANN001, ANN202
-        extensions = [q[0]] + [q[i] - q[i - 1] for i in range(1, n)]
-        return sum(0.5 * springs[i] * extensions[i] ** 2 for i in range(n))
-
-    body = Lagrangian(n=n, T=lambda q, v, t: 0.5 * sum(masses[i] * v[i] ** 2 for i in range(n)), V=V)
-    J = np.zeros((1, n))
-    J[0, n - 2 :] = 1.0
-    real: Realization
-    if realization == "ideal":
-        real, D = Ideal(), J.T
-    else:
-        e_last = np.zeros(n)
-        e_last[-1] = 1.0
-        real, D = Force(M=lambda q, v, t: [e_last.tolist()]), e_last[:, None]
-    model = Model(body, [Constraint(lambda q, v, t: v[n - 1] + v[n - 2], name="lever", realization=real)])
+    constraint, J, D = _lever(n, realization)
+    model = Model(_chain(masses, springs), [constraint])
 
     # the linear motion q̈ = −L q of both realizations (D and J constant)
     Ainv = np.diag(1.0 / masses)
     S = J @ Ainv @ D
     L = (np.eye(n) - Ainv @ D @ np.linalg.solve(S, J)) @ Ainv @ K
-
-    # initial data: at rest, lever tilted, stiff springs on the slow manifold (their extensions'
-    # accelerations −E L q vanish); each stiff spring is stretched about its pair's centre of mass
-    q0 = np.zeros(n)
-    q0[n - 2], q0[n - 1] = -amplitude, amplitude
-    if stiff:
-        P = np.zeros((n, len(stiff)))
-        for r, s in enumerate(stiff):
-            if s == 0:
-                P[0, r] = 1.0
-            else:
-                a, b = masses[s - 1], masses[s]
-                P[s, r], P[s - 1, r] = a / (a + b), -b / (a + b)
-        E = _extension_rows(n, stiff)
-        q0 = q0 + P @ np.linalg.solve(E @ L @ P, -(E @ L @ q0))
+    q0 = _slow_start(masses, stiff, L, amplitude)
     v0 = np.zeros(n)
-
-    mu, modes = np.linalg.eig(L)
-    mu[np.argmin(np.abs(mu))] = 0.0  # J L = 0 exactly: the lever's mode does not oscillate
-    omega = np.emath.sqrt(mu.astype(complex))
-    c0, d0 = np.linalg.solve(modes, q0.astype(complex)), np.linalg.solve(modes, v0.astype(complex))
-
-    def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
-        wt = omega * t
-        sin_over_omega = t * np.sinc(wt / np.pi)  # sin(ωt)/ω, → t for the lever's zero mode
-        q = modes @ (c0 * np.cos(wt) + d0 * sin_over_omega)
-        v = modes @ (-c0 * omega * np.sin(wt) + d0 * np.cos(wt))
-        return q.real, v.real
-
     return Scene(
         name="stiff-chain",
         model=model,
@@ -130,7 +79,7 @@ def build(
         v0=v0,
         lam0=None,
         t_end=t_end,
-        exact=exact,
+        exact=_modal_solution(L, q0, v0),
         description=(
             f"{n} masses on springs, stiffness ratio {stiffness_ratio:g}, mass ratio {mass_ratio:g}, "
             f"lever constraint ({realization}); docs/theory.md §6.6"
@@ -146,3 +95,82 @@ def build(
             t_end=t_end,
         ),
     )
+
+
+def _checked(
+    n: int, stiffness_ratio: float, mass_ratio: float, stiff: Sequence[int], realization: str, k: float
+) -> list[int]:
+    """The parameters checked; the stiff springs' indices sorted, without repeats."""
+    if realization not in REALIZATIONS:
+        raise UnknownNameError(f"stiff-chain: realization={realization!r} is unknown; use one of {list(REALIZATIONS)}")
+    if not isinstance(n, (int, np.integer)) or n < 3:
+        raise InputError(f"stiff-chain: need n ≥ 3 masses (a spring to the wall, the lever on the last two), got {n!r}")
+    if not (stiffness_ratio > 0 and mass_ratio > 0 and k > 0):
+        raise InputError(
+            f"stiff-chain: stiffness_ratio, mass_ratio and k must be positive, got {stiffness_ratio}, {mass_ratio}, {k}"
+        )
+    stiff = sorted({int(s) for s in stiff})
+    if any(not 0 <= s < n for s in stiff):
+        raise InputError(f"stiff-chain: stiff springs must be indices in 0…{n - 1}, got {stiff}")
+    return stiff
+
+
+def _chain(masses: np.ndarray, springs: np.ndarray) -> Lagrangian:
+    """The masses on a line, spring 0 to the wall, spring ``i`` between masses ``i − 1`` and ``i``."""
+    n = masses.size
+
+    def V(q, t):  # noqa: ANN001, ANN202
+        extensions = [q[0]] + [q[i] - q[i - 1] for i in range(1, n)]
+        return sum(0.5 * springs[i] * extensions[i] ** 2 for i in range(n))
+
+    return Lagrangian(n=n, T=lambda q, v, t: 0.5 * sum(masses[i] * v[i] ** 2 for i in range(n)), V=V)
+
+
+def _lever(n: int, realization: str) -> tuple[Constraint, np.ndarray, np.ndarray]:
+    """The lever ``v[n−1] + v[n−2] = 0`` with its realization, and its constant ``J`` and ``D``."""
+    J = np.zeros((1, n))
+    J[0, n - 2 :] = 1.0
+    real: Realization
+    if realization == "ideal":
+        real, D = Ideal(), J.T
+    else:
+        e_last = np.zeros(n)
+        e_last[-1] = 1.0
+        real, D = Force(M=lambda q, v, t: [e_last.tolist()]), e_last[:, None]
+    return Constraint(lambda q, v, t: v[n - 1] + v[n - 2], name="lever", realization=real), J, D
+
+
+def _slow_start(masses: np.ndarray, stiff: list[int], L: np.ndarray, amplitude: float) -> np.ndarray:
+    """At rest, lever tilted, stiff springs on the slow manifold (their extensions' accelerations
+    ``−E L q`` vanish); each stiff spring is stretched about its pair's centre of mass."""
+    n = masses.size
+    q0 = np.zeros(n)
+    q0[n - 2], q0[n - 1] = -amplitude, amplitude
+    if stiff:
+        P = np.zeros((n, len(stiff)))
+        for r, s in enumerate(stiff):
+            if s == 0:
+                P[0, r] = 1.0
+            else:
+                a, b = masses[s - 1], masses[s]
+                P[s, r], P[s - 1, r] = a / (a + b), -b / (a + b)
+        E = _extension_rows(n, stiff)
+        q0 = q0 + P @ np.linalg.solve(E @ L @ P, -(E @ L @ q0))
+    return q0
+
+
+def _modal_solution(L: np.ndarray, q0: np.ndarray, v0: np.ndarray) -> Callable[[float], tuple[np.ndarray, np.ndarray]]:
+    """The exact motion of ``q̈ = −L q`` from ``(q0, v0)`` by the eigenvectors of ``L``."""
+    mu, modes = np.linalg.eig(L)
+    mu[np.argmin(np.abs(mu))] = 0.0  # J L = 0 exactly: the lever's mode does not oscillate
+    omega = np.emath.sqrt(mu.astype(complex))
+    c0, d0 = np.linalg.solve(modes, q0.astype(complex)), np.linalg.solve(modes, v0.astype(complex))
+
+    def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
+        wt = omega * t
+        sin_over_omega = t * np.sinc(wt / np.pi)  # sin(ωt)/ω, → t for the lever's zero mode
+        q = modes @ (c0 * np.cos(wt) + d0 * sin_over_omega)
+        v = modes @ (-c0 * omega * np.sin(wt) + d0 * np.cos(wt))
+        return q.real, v.real
+
+    return exact

@@ -10,7 +10,7 @@ A planar rigid body (a two-rotor drone seen from the side) with centre of mass `
          [−sin θ, cos θ, +d2]]      (force and torque of each rotor; reaction ``R = Mᵀ (f1, f2)``)
 
 keep one servo-constraint, the altitude ``y − h(t) = 0`` with a smooth rest-to-rest climb
-``h(t) = climb · σ(t/duration)`` (:func:`gausspp.scenes.crane._sigma`, zero velocity,
+``h(t) = climb · σ(t/duration)`` (:func:`gausspp.scenes.crane.rest_to_rest`, zero velocity,
 acceleration and jerk at both ends). One constraint row, two actuators (``m = 2 > k = 1``):
 infinitely many thrust pairs keep it. Gauss's principle picks the one of least compulsion
 
@@ -43,7 +43,7 @@ from ..model.constraints import Holonomic
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
 from ..model.realizations import Force
-from .crane import _sigma
+from .crane import rest_to_rest
 from .scene import Scene
 
 
@@ -56,7 +56,7 @@ def altitude(climb: float, duration: float) -> Callable[[Any], Any]:
             tau = ca.fmin(ca.fmax(t / duration, 0), 1)
         else:
             tau = np.clip(np.asarray(t, float) / duration, 0.0, 1.0)
-        return climb * _sigma(tau)
+        return climb * rest_to_rest(tau)
 
     return h
 
@@ -104,44 +104,12 @@ def build(
         _positive(n, x)
         for n, x in (("m", m), ("I", I), ("d1", d1), ("d2", d2), ("duration", duration), ("t_end", t_end))
     )
-    for name, value in (("g", g), ("theta0", theta0), ("climb", climb)):
-        if not (isinstance(value, (int, float, np.floating, np.integer)) and np.isfinite(value)):
-            raise InputError(f"two-actuator-servo: {name} must be a finite number, got {value!r}")
-    if not abs(theta0) < np.pi / 2:
-        raise InputError(f"two-actuator-servo: |theta0| must be below π/2 (the rotors must push upwards), got {theta0}")
-    bounds: tuple[float, np.ndarray] | None = None
-    if f_max is not None:
-        caps = np.broadcast_to(np.asarray(f_max, dtype=float), (2,)) if np.size(f_max) in (1, 2) else None
-        if caps is None or not np.all(caps > 0):  # NaN fails too
-            raise InputError(
-                f"two-actuator-servo: f_max must be a positive number or a pair of them (inf allowed), got {f_max!r}"
-            )
-        bounds = (0.0, caps.copy())
+    _check_numbers(g, theta0, climb)
+    bounds = _thrust_bounds(f_max)
     theta0, g, climb = float(theta0), float(g), float(climb)
-    h = altitude(climb, duration)
-    body = Lagrangian(
-        n=3,
-        T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2) + 0.5 * I * v[2] ** 2,
-        V=lambda q, t: m * g * q[1],
-    )
-
-    def rotors(q: Any, v: Any, t: Any) -> Any:
-        s, c = ca.sin(q[2]), ca.cos(q[2])
-        return ca.vertcat(ca.horzcat(-s, c, -d1), ca.horzcat(-s, c, d2))
-
-    servo = Holonomic(
-        lambda q, t: q[1] - h(t), name="altitude follows h(t)", realization=Force(M=rotors, bounds=bounds)
-    )
-    model = Model(body, [servo])
+    model = _model(m, I, d1, d2, g, altitude(climb, duration), bounds)
     q0, v0 = np.array([0.0, 0.0, theta0]), np.zeros(3)
-    exact: Callable[[float], tuple[np.ndarray, np.ndarray]] | None = None
-    if f_max is None:
-
-        def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
-            y, dy, _ = altitude_derivatives(t, climb, duration)
-            tan = np.tan(theta0)
-            return np.array([-tan * (y + 0.5 * g * t * t), y, theta0]), np.array([-tan * (dy + g * t), dy, 0.0])
-
+    exact = _exact(theta0, g, climb, duration) if f_max is None else None
     return Scene(
         name="two-actuator-servo",
         model=model,
@@ -158,3 +126,55 @@ def build(
             m=m, I=I, d1=d1, d2=d2, g=g, theta0=theta0, climb=climb, duration=duration, f_max=f_max, t_end=t_end
         ),
     )
+
+
+def _check_numbers(g: Any, theta0: Any, climb: Any) -> None:
+    """``g``, ``theta0``, ``climb`` finite numbers; the rotors push upwards (``|theta0| < π/2``)."""
+    for name, value in (("g", g), ("theta0", theta0), ("climb", climb)):
+        if not (isinstance(value, (int, float, np.floating, np.integer)) and np.isfinite(value)):
+            raise InputError(f"two-actuator-servo: {name} must be a finite number, got {value!r}")
+    if not abs(theta0) < np.pi / 2:
+        raise InputError(f"two-actuator-servo: |theta0| must be below π/2 (the rotors must push upwards), got {theta0}")
+
+
+def _thrust_bounds(f_max: Any) -> tuple[float, np.ndarray] | None:
+    """The thrusts' bounds ``[0, f_max]`` (one per rotor), or ``None`` for unbounded rotors."""
+    if f_max is None:
+        return None
+    caps = np.broadcast_to(np.asarray(f_max, dtype=float), (2,)) if np.size(f_max) in (1, 2) else None
+    if caps is None or not np.all(caps > 0):  # NaN fails too
+        raise InputError(
+            f"two-actuator-servo: f_max must be a positive number or a pair of them (inf allowed), got {f_max!r}"
+        )
+    return (0.0, caps.copy())
+
+
+def _model(
+    m: float, I: float, d1: float, d2: float, g: float, h: Callable[[Any], Any], bounds: tuple[float, np.ndarray] | None
+) -> Model:
+    """The planar body ``q = (x, y, θ)`` under gravity, its altitude ``y = h(t)`` kept by the two rotors."""
+    body = Lagrangian(
+        n=3,
+        T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2) + 0.5 * I * v[2] ** 2,
+        V=lambda q, t: m * g * q[1],
+    )
+
+    def rotors(q: Any, v: Any, t: Any) -> Any:
+        s, c = ca.sin(q[2]), ca.cos(q[2])
+        return ca.vertcat(ca.horzcat(-s, c, -d1), ca.horzcat(-s, c, d2))
+
+    servo = Holonomic(
+        lambda q, t: q[1] - h(t), name="altitude follows h(t)", realization=Force(M=rotors, bounds=bounds)
+    )
+    return Model(body, [servo])
+
+
+def _exact(theta0: float, g: float, climb: float, duration: float) -> Callable[[float], tuple[np.ndarray, np.ndarray]]:
+    """The unbounded motion: ``y = h(t)``, ``θ = θ0``, ``x = −tan θ0 (h + g t²/2)`` (thrust along the body's axis)."""
+
+    def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
+        y, dy, _ = altitude_derivatives(t, climb, duration)
+        tan = np.tan(theta0)
+        return np.array([-tan * (y + 0.5 * g * t * t), y, theta0]), np.array([-tan * (dy + g * t), dy, 0.0])
+
+    return exact
