@@ -143,6 +143,8 @@ class StepData:
 
 
 _FIELDS = tuple(StepData.__dataclass_fields__)
+_SCALARS = ("energy", "power")
+_MATRICES = ("A", "J", "D", "Jc")
 
 
 def _build(model: StepModel) -> Bound:
@@ -176,12 +178,11 @@ def evaluate(
     load_inputs(bound.args, (t, q, v, lam, stab))
     bound.eval()
     values: dict[str, Any] = {}
-    for i, (name, raw) in enumerate(zip(_FIELDS, bound.res, strict=True)):
-        rows, cols = bound.fn.size_out(i)
-        if name in ("energy", "power"):
+    for name, raw, shape in zip(_FIELDS, bound.res, bound.shapes, strict=True):
+        if name in _SCALARS:
             values[name] = float(raw[0])
-        elif name in ("A", "J", "D", "Jc"):
-            values[name] = raw.reshape((rows, cols), order="F").copy()
+        elif name in _MATRICES:
+            values[name] = raw.reshape(shape, order="F").copy()
         else:
             values[name] = raw.copy()
     return StepData(**values)

@@ -41,6 +41,8 @@ class Bound:
             self._buf.set_arg(i, memoryview(arr))  # type: ignore[call-arg, arg-type]  # casadi's stubs
         for i, arr in enumerate(self.res):
             self._buf.set_res(i, memoryview(arr))  # type: ignore[call-arg, arg-type]
+        #: each output's (rows, cols)
+        self.shapes = [fn.size_out(i) for i in range(fn.n_out())]
         # matrix-shaped views of the output buffers, made once (casadi stores column-major)
         self.outputs = [
             r.reshape(fn.size_out(i), order="F") if fn.size_out(i)[1] > 1 else r for i, r in enumerate(self.res)
