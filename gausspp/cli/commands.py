@@ -23,7 +23,7 @@ import numpy as np
 from .. import plot, scenes
 from ..errors import GaussppError, UnknownNameError
 from ..scenes.scene import kinds as parameter_kinds
-from ..simulation import methods
+from ..simulation import lanes, methods
 from ..simulation.trajectory import Trajectory
 from ..step import qp
 from ..studies import demo as demo_study
@@ -97,10 +97,11 @@ def report(args: argparse.Namespace) -> int:
 def _step_options(args: argparse.Namespace, scene: scenes.Scene, meth: methods.Method) -> dict[str, Any]:
     """``solver``, ``backend`` and ``stabilize`` of :func:`gausspp.simulate` as the command line asks."""
     solver, backend = getattr(args, "solver", None), getattr(args, "backend", None)
-    if solver is None:  # CVODES differentiates the right-hand side: the direct step only
-        solver = "direct" if meth.name == "cvodes" else "qp"
-    elif meth.name == "cvodes" and solver != "direct":
-        raise UsageError("--method cvodes needs --solver direct (CVODES differentiates the right-hand side)")
+    if solver is None:  # the lane's own default (CVODES differentiates the right-hand side: the direct step)
+        solver = lanes.default_solver(meth)
+    elif not lanes.accepts(meth, solver):
+        lane = lanes.lane_of(meth, lanes.KINDS[lanes.SMOOTH])
+        raise UsageError(f"--method {meth.name} needs --solver {' or '.join(lane.solvers)} ({lane.solver_reason})")
     stabilize = getattr(args, "stabilize", None)
     if stabilize is None:  # the scene's own drift control (a bounded servo's feedback), else none
         stabilize = scene.params.get("stabilize", "none")

@@ -27,6 +27,7 @@ import numpy as np
 
 from .. import scenes
 from ..errors import GaussppError, InputError, UnknownNameError
+from ..simulation import lanes
 from ..simulation import methods as _methods
 from ..simulation.simulate import simulate
 from ..step import qp
@@ -228,8 +229,8 @@ def plan(
         T = float(study_times(study_scene(name), samples)[-1])
         for meth in meths:
             for solver in solver_list:
-                if meth.name == "cvodes" and solver != "direct":
-                    continue  # CVODES differentiates the right-hand side: direct path only
+                if not lanes.accepts(meth, "direct" if solver == "direct" else "qp"):
+                    continue  # e.g. CVODES differentiates the right-hand side: the direct step only
                 for setting, opts in settings(meth, T, samples, quick):
                     runs.append(
                         {"task": "run", "scene": name, "method": meth.name, "solver": solver, "setting": setting}
