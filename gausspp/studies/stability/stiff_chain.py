@@ -32,63 +32,69 @@ def _highest_frequency(model: Model) -> float:
     return float(np.sqrt(np.max(np.linalg.eigvals(L).real)))
 
 
-def _contrast(ratio: float, t_end: float, tol: float = 1e-6, rk45: bool = False) -> dict[str, float]:
-    """RK4 at its largest step reaching ``tol`` against Radau (BDF, cvodes and, if asked, RK45); numbers only."""
-    scene = scenes.get("stiff-chain", stiffness_ratio=ratio, t_end=t_end)
-    model, q0, v0 = scene.model, scene.q0, scene.v0
-    assert scene.exact is not None
-    qe, ve = scene.exact(t_end)
+class _Chain:
+    """The stiff chain at one stiffness ratio, its exact end state, and runs judged against it."""
 
-    def error(traj: Trajectory) -> float:
+    def __init__(self, ratio: float, t_end: float) -> None:
+        scene = scenes.get("stiff-chain", stiffness_ratio=ratio, t_end=t_end)
+        assert scene.exact is not None
+        self.model, self.q0, self.v0, self.t_end = scene.model, scene.q0, scene.v0, t_end
+        self.qe, self.ve = scene.exact(t_end)
+        self.reached: dict[int, bool] = {}
+
+    def error(self, traj: Trajectory) -> float:
         if not traj.success:
             return math.inf
-        return float(max(np.max(np.abs(traj.q[-1] - qe)), np.max(np.abs(traj.v[-1] - ve))))
+        return float(max(np.max(np.abs(traj.q[-1] - self.qe)), np.max(np.abs(traj.v[-1] - self.ve))))
 
-    def rk4(n: int, method: str = "rk4-compiled") -> Trajectory:
-        return simulate(model, q0, v0, t_end, dt=t_end / n, method=method, solver="direct", record=n, throw=False)
+    def rk4(self, n: int, method: str = "rk4-compiled") -> Trajectory:
+        return simulate(
+            self.model,
+            self.q0,
+            self.v0,
+            self.t_end,
+            dt=self.t_end / n,
+            method=method,
+            solver="direct",
+            record=n,
+            throw=False,
+        )
 
-    reached: dict[int, bool] = {}
+    def reaches(self, n: int, tol: float) -> bool:
+        if n not in self.reached:
+            self.reached[n] = self.error(self.rk4(n)) <= tol
+        return self.reached[n]
 
-    def reaches(n: int) -> bool:
-        if n not in reached:
-            reached[n] = error(rk4(n)) <= tol
-        return reached[n]
+    def largest_step(self, tol: float) -> tuple[int, int]:
+        """``(lo, hi)``: RK4 with ``hi`` steps reaches ``tol``, with ``lo`` it does not (0: not searched below 8)."""
+        n = 8
+        while not self.reaches(n, tol):
+            n *= 2
+            if n > 2**24:
+                raise GaussppError(f"RK4 did not reach {tol:g} with 2^24 steps")  # pragma: no cover
+        lo, hi = (n // 2, n) if n > 8 else (0, n)
+        while hi - lo > max(1, hi // 200):  # to 0.5 %
+            mid = (lo + hi) // 2
+            lo, hi = (lo, mid) if self.reaches(mid, tol) else (mid, hi)
+        return lo, hi
 
-    n = 8
-    while not reaches(n):
-        n *= 2
-        if n > 2**24:
-            raise GaussppError(f"RK4 did not reach {tol:g} with 2^24 steps")  # pragma: no cover
-    lo, hi = (n // 2, n) if n > 8 else (0, n)
-    while hi - lo > max(1, hi // 200):  # to 0.5 %
-        mid = (lo + hi) // 2
-        lo, hi = (lo, mid) if reaches(mid) else (mid, hi)
-    omega = _highest_frequency(model)
-    out: dict[str, float] = {
-        "stiffness_ratio": ratio,
-        "t_end": t_end,
-        "omega_max": omega,
-        "rk4_steps": float(hi),
-        "rk4_dt": t_end / hi,
-        "rk4_dt_times_omega": t_end / hi * omega,
-        "rk4_runs_in_search": float(len(reached)),
-    }
-    if lo > 0:
-        out["rk4_next_larger_dt"] = t_end / lo
-        out["rk4_next_larger_dt_error"] = error(rk4(lo))
-    # the same step in the Python lane (one step evaluation per stage): work and wall time
-    start = time.perf_counter()
-    py = rk4(hi, "rk4")
-    out["rk4_wall_s"] = time.perf_counter() - start
-    out["rk4_evaluations"] = float(py.rhs_evaluations)
-    out["rk4_error"] = error(py)
-    start = time.perf_counter()
-    out["rk4_compiled_error"] = error(rk4(hi))
-    out["rk4_compiled_wall_s"] = time.perf_counter() - start
+    def adaptive(
+        self, out: dict[str, float], key: str, method: str, rtol: float, atol: float, warm_up: bool = True
+    ) -> None:
+        """One adaptive run's wall time, steps, evaluations and error, into ``out`` under ``key``."""
 
-    def adaptive(key: str, method: str, rtol: float, atol: float, warm_up: bool = True) -> None:
         def once() -> Trajectory:
-            return simulate(model, q0, v0, t_end, method=method, solver="direct", rtol=rtol, atol=atol, throw=False)
+            return simulate(
+                self.model,
+                self.q0,
+                self.v0,
+                self.t_end,
+                method=method,
+                solver="direct",
+                rtol=rtol,
+                atol=atol,
+                throw=False,
+            )
 
         if warm_up:  # the exact Jacobian (Radau, BDF) and CVODES' graph are compiled on first use
             once()
@@ -97,14 +103,47 @@ def _contrast(ratio: float, t_end: float, tol: float = 1e-6, rk45: bool = False)
         out[f"{key}_wall_s"] = time.perf_counter() - start
         out[f"{key}_steps"] = float(traj.steps)
         out[f"{key}_evaluations"] = float(traj.rhs_evaluations)
-        out[f"{key}_error"] = error(traj)
+        out[f"{key}_error"] = self.error(traj)
 
-    adaptive("radau", "Radau", 1e-6, 1e-9)
+
+def _rk4_figures(chain: _Chain, ratio: float, tol: float) -> dict[str, float]:
+    """RK4's largest step reaching ``tol``, and that step's work and wall time in both lanes."""
+    lo, hi = chain.largest_step(tol)
+    t_end, omega = chain.t_end, _highest_frequency(chain.model)
+    out: dict[str, float] = {
+        "stiffness_ratio": ratio,
+        "t_end": t_end,
+        "omega_max": omega,
+        "rk4_steps": float(hi),
+        "rk4_dt": t_end / hi,
+        "rk4_dt_times_omega": t_end / hi * omega,
+        "rk4_runs_in_search": float(len(chain.reached)),
+    }
+    if lo > 0:
+        out["rk4_next_larger_dt"] = t_end / lo
+        out["rk4_next_larger_dt_error"] = chain.error(chain.rk4(lo))
+    # the same step in the Python lane (one step evaluation per stage): work and wall time
+    start = time.perf_counter()
+    py = chain.rk4(hi, "rk4")
+    out["rk4_wall_s"] = time.perf_counter() - start
+    out["rk4_evaluations"] = float(py.rhs_evaluations)
+    out["rk4_error"] = chain.error(py)
+    start = time.perf_counter()
+    out["rk4_compiled_error"] = chain.error(chain.rk4(hi))
+    out["rk4_compiled_wall_s"] = time.perf_counter() - start
+    return out
+
+
+def _contrast(ratio: float, t_end: float, tol: float = 1e-6, rk45: bool = False) -> dict[str, float]:
+    """RK4 at its largest step reaching ``tol`` against Radau (BDF, cvodes and, if asked, RK45); numbers only."""
+    chain = _Chain(ratio, t_end)
+    out = _rk4_figures(chain, ratio, tol)
+    chain.adaptive(out, "radau", "Radau", 1e-6, 1e-9)
     out["evaluation_ratio"] = out["rk4_evaluations"] / max(out["radau_evaluations"], 1.0)
-    adaptive("bdf", "BDF", 1e-8, 1e-10)
-    adaptive("cvodes", "cvodes", 1e-8, 1e-10)
+    chain.adaptive(out, "bdf", "BDF", 1e-8, 1e-10)
+    chain.adaptive(out, "cvodes", "cvodes", 1e-8, 1e-10)
     if rk45:  # an explicit adaptive method for contrast: its step is limited by stability, not accuracy
-        adaptive("rk45", "RK45", 1e-8, 1e-10, warm_up=False)
+        chain.adaptive(out, "rk45", "RK45", 1e-8, 1e-10, warm_up=False)
     return out
 
 
