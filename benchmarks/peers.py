@@ -287,6 +287,7 @@ def figure(rows: list[Row], path: str) -> None:
             marker = "o" if r.what.startswith("gausspp") else ("s" if r.what.startswith("MuJoCo") else "^")
             ax.loglog(r.wall_ms, max(r.error, 1e-16), marker, label=r.what)
     ax.set(xlabel="wall time of the whole run [ms]", ylabel="error at T", title=f"P2 pendulum, T = 2 s, dt = {DT:g}")
+    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())  # decade labels only
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
