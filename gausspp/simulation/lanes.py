@@ -237,21 +237,20 @@ def graph_backend_error(lane: Lane, backend: str | None) -> str:
     )
 
 
-def check_kind(
-    method: Method, kind: Kind, solver: str, project: bool, among: tuple[Lane, ...] | None = None
-) -> Lane:
+def check_kind(method: Method, kind: Kind, solver: str, project: bool, among: tuple[Lane, ...] | None = None) -> Lane:
     """The fastest lane (of ``among``, by default every lane) that runs ``method`` on ``kind`` with ``solver`` (and
     projection if ``project``), or a clear refusal."""
     if solver not in kind.solvers:
         raise InputError(
             f"solver={solver!r} cannot step {kind.description}; use solver={' or '.join(map(repr, kind.solvers))}"
         )
-    fits = [lane for lane in (_lanes_running(method) if among is None else among) if kind.name in lane.kinds]
+    among = tuple(_lanes_running(method)) if among is None else among
+    fits = [lane for lane in among if kind.name in lane.kinds]
     if not fits:
         other = lane_of(method, kind)  # refuses, naming the methods that can, unless another lane runs it
         raise InputError(
-            f"method {method.name!r} on {kind.description} runs in the {other.name} lane, not the one asked for: "
-            f"pass lane={other.name!r} or leave lane unset"
+            f"the {' or '.join(lane.name for lane in among)} lane cannot run method {method.name!r} on "
+            f"{kind.description}; the {other.name} lane can: pass lane={other.name!r} or leave lane unset"
         )
     for lane in fits:
         if lane.project or not project:
