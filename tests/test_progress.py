@@ -33,14 +33,15 @@ def test_a_disabled_progress_writes_nothing() -> None:
 
 
 def test_a_long_fixed_step_run_reports_progress(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture) -> None:
-    """With the threshold lowered to 10 steps (instead of 10⁶) a 400-step rk4 run warns and reports progress."""
+    """With the threshold lowered to 10 steps (instead of 10⁶) a 400-step rk4 run stepped from Python warns and
+    reports progress (``lane="python"``: by default rk4 runs as one compiled call, which reports nothing)."""
     monkeypatch.setattr(simulate_module, "LONG_RUN_STEPS", 10)
     monkeypatch.setattr(simulate_module, "PROGRESS_EVERY", 50)
     monkeypatch.setattr(Progress, "__init__", _every_call(Progress.__init__))
     scene = gp.scenes.get("two-masses")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        traj = gp.simulate(scene.model, scene.q0, scene.v0, 4.0, method="rk4", dt=0.01)
+        traj = gp.simulate(scene.model, scene.q0, scene.v0, 4.0, method="rk4", dt=0.01, lane="python")
     assert traj.success and len(traj) == 401
     assert any(issubclass(w.category, gp.LongRunWarning) and "standard error" in str(w.message) for w in caught)
     err = capsys.readouterr().err

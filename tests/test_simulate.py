@@ -130,7 +130,7 @@ def test_bad_arguments() -> None:
     with pytest.raises(gp.UnknownNameError, match="method='rk5' is unknown; valid methods"):
         gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.1, method="rk5")
     with pytest.raises(gp.InputError, match="fixed step: give dt"):
-        gp.simulate(s.model, s.q0, s.v0, 1.0)
+        gp.simulate(s.model, s.q0, s.v0, 1.0, method="rk4")  # without a method, no dt means adaptive
     with pytest.raises(gp.InputError, match="t0 < t_end"):
         gp.simulate(s.model, s.q0, s.v0, -1.0, dt=0.1)
     with pytest.raises(gp.InputError, match="needs solver='direct'"):
@@ -189,3 +189,56 @@ def test_trajectories_record_the_contact_gaps() -> None:
     assert traj.gap.min() >= -1e-9 and np.any(traj.gap.min(axis=1) <= 1e-9)  # it lands
     s = gp.scenes.get("two-masses")
     assert gp.simulate(s.model, s.q0, s.v0, 0.1, dt=0.01).gap.shape == (11, 0)
+
+
+# -- the lane is gausspp's choice: a method names the integrator ------------------------------------
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+def test_rk4_runs_compiled_with_the_numbers_of_the_lanes_it_replaces(solver: str) -> None:
+    """``method="rk4"`` runs in the compiled lane (as ``rk4-compiled``); the Python lane, asked for by name, steps
+    the same RK4: the three trajectories agree to round-off (scaled by the size of the state)."""
+    s = gp.scenes.get("pendulum")
+    runs = {
+        name: gp.simulate(s.model, s.q0, s.v0, 0.5, dt=1e-3, solver=solver, **options)
+        for name, options in {
+            "rk4": dict(method="rk4"),
+            "rk4-compiled": dict(method="rk4-compiled"),
+            "python": dict(method="rk4", lane="python"),
+        }.items()
+    }
+    assert [r.lane for r in runs.values()] == ["compiled", "compiled", "python"]
+    assert runs["rk4"].method == "rk4" and runs["python"].method == "rk4"
+    reference = runs["python"]
+    for traj in runs.values():
+        assert traj.success and len(traj) == len(reference)
+        for field in ("q", "v", "a", "reaction"):
+            want, got = getattr(reference, field), getattr(traj, field)
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * (1.0 + np.max(np.abs(want))))
+
+
+def test_rk4_runs_from_python_where_something_needs_python() -> None:
+    s = gp.scenes.get("two-masses")
+    osqp = gp.simulate(s.model, s.q0, s.v0, 0.1, dt=0.01, method="rk4", backend="qpsolvers:osqp")
+    assert osqp.success and osqp.lane == "python"  # a QP backend outside casadi
+    crane = gp.scenes.get("saturated-crane")
+    bounded = gp.simulate(crane.model, crane.q0, crane.v0, 0.05, dt=0.01, method="rk4")
+    assert bounded.lane == "python"  # bounded actuators: the general Gauss QP at every step
+    with pytest.raises(gp.InputError, match="compiled lane"):
+        gp.simulate(crane.model, crane.q0, crane.v0, 0.05, dt=0.01, method="rk4", lane="compiled")
+    with pytest.raises(gp.InputError, match=r"lane='cvodes' does not run method 'rk4'"):
+        gp.simulate(s.model, s.q0, s.v0, 0.1, dt=0.01, method="rk4", lane="cvodes")
+    with pytest.raises(gp.UnknownNameError, match=r"lane='fast' is unknown"):
+        gp.simulate(s.model, s.q0, s.v0, 0.1, dt=0.01, lane="fast")
+    assert gp.simulate(s.model, s.q0, s.v0, 0.1, method="RK45").lane == "scipy"
+
+
+def test_the_shortest_call_integrates_adaptively_to_the_tolerances() -> None:
+    """``gp.simulate(model, q0, v0, t_end)``: no method and no dt is DOP853 to ``rtol``/``atol``; with ``dt`` and no
+    method, RK4 (in the compiled lane)."""
+    s = gp.scenes.get("pendulum")
+    traj = gp.simulate(s.model, s.q0, s.v0, 0.5)
+    assert traj.success and traj.method == "DOP853" and traj.lane == "scipy" and traj.t[-1] == 0.5
+    fine = gp.simulate(s.model, s.q0, s.v0, 0.5, dt=1e-3)
+    assert fine.method == "rk4" and fine.lane == "compiled"
+    assert np.max(np.abs(traj.q[-1] - fine.q[-1])) < 1e-8
+    loose = gp.simulate(s.model, s.q0, s.v0, 0.5, rtol=1e-4, atol=1e-6)
+    assert loose.steps < traj.steps  # the tolerances are the given ones

@@ -45,6 +45,8 @@ class Options:
     throw: bool
     rest_speed: float
     max_events: int
+    #: The lanes that can run the method with these options, fastest first (:func:`lanes.check_solver`).
+    lanes: tuple[lanes.Lane, ...] = ()
 
 
 def check_options(  # the arguments of gp.simulate, in its order
@@ -62,11 +64,12 @@ def check_options(  # the arguments of gp.simulate, in its order
     throw: Any,
     rest_speed: Any,
     max_events: Any,
+    lane: str | None = None,
 ) -> Options:
     """Every argument of a run that does not need the state, checked; the errors name the argument and the fix."""
     if not isinstance(model, Model):
         raise InputError(f"model must be a gp.Model (scenes carry one: gp.scenes.get(name).model), got {model!r}")
-    meth = _methods.get(lanes.default_method(model) if method is None else method)
+    meth = _methods.get(lanes.default_method(model, dt) if method is None else method)
     t0 = number(f"t0 must be a finite number, got {t0!r}", t0)
     t_end = number(f"t_end must be a finite number, got {t_end!r}", t_end)
     if not t_end > t0:
@@ -83,11 +86,24 @@ def check_options(  # the arguments of gp.simulate, in its order
     if not isinstance(throw, (bool, np.bool_)):
         raise InputError(f"throw must be True or False, got {throw!r}")
     record = check_record(record, t0, t_end)
+    among = lanes.check_solver(meth, solver, backend, lane)
     if dt is not None:
-        check_step_count(meth, model, t0, t_end, dt, record)
-    lanes.check_solver(meth, solver, backend)
+        among = check_step_count(meth, model, t0, t_end, dt, record, among)
     return Options(
-        meth, t0, t_end, dt, solver, backend, rtol, atol, record, constraint_tol, bool(throw), rest_speed, max_events
+        meth,
+        t0,
+        t_end,
+        dt,
+        solver,
+        backend,
+        rtol,
+        atol,
+        record,
+        constraint_tol,
+        bool(throw),
+        rest_speed,
+        max_events,
+        among,
     )
 
 
@@ -105,10 +121,19 @@ def check_record(record: Any, t0: float, t_end: float) -> Any:
     return times
 
 
-def check_step_count(meth: _methods.Method, model: Model, t0: float, t_end: float, dt: float, record: Any) -> None:
+def check_step_count(
+    meth: _methods.Method,
+    model: Model,
+    t0: float,
+    t_end: float,
+    dt: float,
+    record: Any,
+    among: tuple[lanes.Lane, ...],
+) -> tuple[lanes.Lane, ...]:
     """Refuse a run of more than :data:`MAX_STEPS` steps or whose kept states exceed :data:`MAX_KEPT_BYTES`; warn
     (:class:`~gausspp.LongRunWarning`) above :data:`LONG_RUN_STEPS` steps, before the wait. For an adaptive method
-    ``dt`` is the largest step, so the count is a lower bound."""
+    ``dt`` is the largest step, so the count is a lower bound. Returns the lanes of ``among`` whose kept states fit
+    (a lane that keeps every step gives way to one that thins)."""
     steps = (t_end - t0) / dt  # a float: t_end=1e300 must not overflow an integer
     bound = "at least " if meth.adaptive else ""
     what = f"t_end - t0 = {t_end - t0:.6g} with dt={dt:.3g} is {bound}{steps:.3g} steps"
@@ -117,7 +142,8 @@ def check_step_count(meth: _methods.Method, model: Model, t0: float, t_end: floa
             f"{what}, more than the {MAX_STEPS:.0e} a run may take (days of computing): enlarge dt or shorten t_end"
         )
     width = 8 * (model.nq + model.nv + model.n_lam + 2)
-    every_step = lanes.keeps_every_step(meth)
+    among = lanes.fitting(among, (steps + 1) * width <= MAX_KEPT_BYTES)
+    every_step = bool(among) and among[0].keeps_every_step
     if every_step:  # the compiled RK keeps every step's state
         kept = steps + 1
     elif np.isscalar(record):  # every record-th fixed step; every accepted step of an adaptive method
@@ -131,7 +157,7 @@ def check_step_count(meth: _methods.Method, model: Model, t0: float, t_end: floa
             f"{MAX_KEPT_BYTES / 2**30:g} GiB): enlarge dt or shorten t_end{keep_less}"
         )
     if steps > LONG_RUN_STEPS:
-        shown = lanes.progress_shown(meth)
+        shown = bool(among) and among[0].progress
         warnings.warn(
             f"{what} (method {meth.name!r}): this run will take long"
             + (" (its progress and the time left are shown on standard error)" if shown else "")
@@ -140,3 +166,4 @@ def check_step_count(meth: _methods.Method, model: Model, t0: float, t_end: floa
             LongRunWarning,
             stacklevel=4,
         )
+    return among

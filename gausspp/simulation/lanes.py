@@ -8,6 +8,13 @@ phases. :func:`gausspp.simulate` consults these tables and nothing else; every r
 them, so a rule is changed in one place. Front ends (the command line, the studies) ask
 :func:`accepts` and :func:`default_solver` instead of repeating a rule.
 
+A method name says which integrator; the lane is gausspp's choice. Where several lanes run a method
+(``rk4``: compiled and Python), :data:`LANES` lists them fastest first and a run takes the first that
+can take the model and the options (:func:`candidates`, then :func:`check_kind`): ``rk4`` runs as one
+casadi graph unless something needs Python (bounded actuators or redundant rows, a QP backend outside
+casadi, more states than the compiled run may keep). ``simulate(lane=...)`` names a lane instead; the
+trajectory says which lane ran (``Trajectory.lane``).
+
 To add a lane: add a :class:`Lane` row here (its methods, kinds, solvers and abilities) and a runner
 in :mod:`gausspp.simulation.simulate`'s dispatch table.
 """
@@ -34,7 +41,7 @@ class Kind:
     description: str
     #: The step solvers that can step it.
     solvers: tuple[str, ...]
-    #: The method when none is given.
+    #: The method when ``dt`` is given and no method.
     default_method: str
     #: What an integrator must do for it (used when a method cannot): a verb phrase and what it needs.
     task: str = ""
@@ -95,18 +102,9 @@ LANES: dict[str, Lane] = {
     lane.name: lane
     for lane in (
         Lane(
-            "python",
-            "fixed steps from Python",
-            ("rk4", "symplectic-euler"),
-            (SMOOTH, GENERAL),
-            SOLVERS,
-            progress=True,
-        ),
-        Lane("scipy", "scipy's OdeSolver", _SCIPY, (SMOOTH, GENERAL), SOLVERS),
-        Lane(
             "compiled",
             "the compiled step (the whole run as one casadi graph)",
-            ("rk4-compiled",),
+            ("rk4-compiled", "rk4"),
             (SMOOTH,),
             SOLVERS,
             qp_in_graph=True,
@@ -124,6 +122,15 @@ LANES: dict[str, Lane] = {
             no_project_reason="it cannot project between its internal steps",
         ),
         Lane(
+            "python",
+            "fixed steps from Python",
+            ("rk4", "symplectic-euler"),
+            (SMOOTH, GENERAL),
+            SOLVERS,
+            progress=True,
+        ),
+        Lane("scipy", "scipy's OdeSolver", _SCIPY, (SMOOTH, GENERAL), SOLVERS),
+        Lane(
             "events",
             "event-driven phases",
             _SCIPY,
@@ -134,6 +141,9 @@ LANES: dict[str, Lane] = {
         ),
     )
 }
+
+#: The method when neither a method nor ``dt`` is given: adaptive, error-controlled to ``rtol`` and ``atol``.
+ADAPTIVE_DEFAULT = "DOP853"
 
 #: The general QP's pair of refusals that is no lane's business: contacts and bounds in one model.
 CONTACTS_WITH_BOUNDS = "unilateral contacts together with bounded actuators are not supported"
@@ -148,8 +158,11 @@ def kind_of(model: Model, redundant: bool = False) -> Kind:
     return KINDS[GENERAL] if model.bounded or redundant else KINDS[SMOOTH]
 
 
-def default_method(model: Model) -> str:
-    """The method :func:`gausspp.simulate` uses when none is given."""
+def default_method(model: Model, dt: float | None = None) -> str:
+    """The method :func:`gausspp.simulate` uses when none is given: without ``dt`` the adaptive
+    :data:`ADAPTIVE_DEFAULT`, with ``dt`` the default of the model's kind."""
+    if dt is None:
+        return ADAPTIVE_DEFAULT
     return KINDS[CONTACTS if model.contacts else SMOOTH].default_method
 
 
@@ -171,21 +184,49 @@ def _lanes_running(method: Method) -> list[Lane]:
     return [lane for lane in LANES.values() if method.name in lane.methods]
 
 
-def check_solver(method: Method, solver: str, backend: str | None) -> None:
-    """The rules on ``solver`` and ``backend`` that hold for every kind of model (checked before the state)."""
+def check_solver(method: Method, solver: str, backend: str | None, lane: str | None = None) -> tuple[Lane, ...]:
+    """The lanes that can run ``method`` with ``solver`` and ``backend``, fastest first (only ``lane`` if one is
+    named): the rules that hold for every kind of model (checked before the state). Refused when no lane that
+    runs smooth models can take them, with the fastest one's reason."""
     if solver not in SOLVERS:
         raise UnknownNameError(f"solver={solver!r} is unknown; use {' or '.join(map(repr, SOLVERS))}")
     if solver == "direct" and backend is not None:
         raise InputError(f"backend={backend!r} applies to solver='qp' only")
-    for lane in _lanes_running(method):
-        if SMOOTH not in lane.kinds:
-            continue
-        if solver not in lane.solvers:
-            raise InputError(
-                f"method={method.name!r} needs solver={' or '.join(map(repr, lane.solvers))}: {lane.solver_reason}"
-            )
-        if lane.qp_in_graph and solver == "qp" and not qp.get(backend).compiled:
-            raise InputError(graph_backend_error(lane, backend))
+    running = _named(method, lane)
+    refusals = {one.name: _refusal(one, method, solver, backend) for one in running}
+    smooth = [one for one in running if SMOOTH in one.kinds]
+    if smooth and all(refusals[one.name] for one in smooth):
+        raise InputError(refusals[smooth[0].name])
+    return tuple(one for one in running if not refusals[one.name])
+
+
+def _named(method: Method, lane: str | None) -> list[Lane]:
+    """The lanes that run ``method``, fastest first; only ``lane`` if it is named (and runs it)."""
+    running = _lanes_running(method)
+    if lane is None:
+        return running
+    if lane not in LANES:
+        raise UnknownNameError(f"lane={lane!r} is unknown; use one of {list(LANES)} or leave it unset")
+    if lane not in [one.name for one in running]:
+        raise InputError(
+            f"lane={lane!r} does not run method {method.name!r}; it runs {', '.join(map(repr, LANES[lane].methods))}"
+            f" — or leave lane unset (method {method.name!r} runs in {', '.join(one.name for one in running)})"
+        )
+    return [LANES[lane]]
+
+
+def _refusal(lane: Lane, method: Method, solver: str, backend: str | None) -> str:
+    """Why ``lane`` cannot run ``method`` with ``solver`` and ``backend`` (empty if it can)."""
+    if solver not in lane.solvers:
+        return f"method={method.name!r} needs solver={' or '.join(map(repr, lane.solvers))}: {lane.solver_reason}"
+    if lane.qp_in_graph and solver == "qp":
+        try:
+            in_graph = qp.get(backend).compiled
+        except GaussppError as exc:  # unknown or not installed: said so by the lane that runs it, or here
+            return str(exc)
+        if not in_graph:
+            return graph_backend_error(lane, backend)
+    return ""
 
 
 def graph_backend_error(lane: Lane, backend: str | None) -> str:
@@ -196,30 +237,38 @@ def graph_backend_error(lane: Lane, backend: str | None) -> str:
     )
 
 
-def check_kind(method: Method, kind: Kind, solver: str, project: bool) -> Lane:
-    """The lane for ``method`` on ``kind`` with ``solver`` (and projection if ``project``), or a clear refusal."""
+def check_kind(method: Method, kind: Kind, solver: str, project: bool, among: tuple[Lane, ...] | None = None) -> Lane:
+    """The fastest lane (of ``among``, by default every lane) that runs ``method`` on ``kind`` with ``solver`` (and
+    projection if ``project``), or a clear refusal."""
     if solver not in kind.solvers:
         raise InputError(
             f"solver={solver!r} cannot step {kind.description}; use solver={' or '.join(map(repr, kind.solvers))}"
         )
-    lane = lane_of(method, kind)
-    if project and not lane.project:
+    among = tuple(_lanes_running(method)) if among is None else among
+    fits = [lane for lane in among if kind.name in lane.kinds]
+    if not fits:
+        other = lane_of(method, kind)  # refuses, naming the methods that can, unless another lane runs it
         raise InputError(
-            f"stabilize='project' is not supported by method={method.name!r} on {kind.description} "
-            f"({lane.no_project_reason}); use stabilize='baumgarte' or None"
+            f"the {' or '.join(lane.name for lane in among)} lane cannot run method {method.name!r} on "
+            f"{kind.description}; the {other.name} lane can: pass lane={other.name!r} or leave lane unset"
         )
-    return lane
+    for lane in fits:
+        if lane.project or not project:
+            return lane
+    raise InputError(
+        f"stabilize='project' is not supported by method={method.name!r} on {kind.description} "
+        f"({fits[0].no_project_reason}); use stabilize='baumgarte' or None"
+    )
 
 
 def accepts(method: Method, solver: str, backend: str | None = None, kind: str = SMOOTH) -> bool:
     """Whether ``method`` with ``solver`` (and QP ``backend``) can run a model of ``kind`` — for front ends that
     list the combinations they try (the work-precision study, the command line)."""
     try:
-        check_solver(method, solver, backend)
-        lane = lane_of(method, KINDS[kind])
+        check_kind(method, KINDS[kind], solver, False, check_solver(method, solver, backend))
     except GaussppError:  # refused, or the backend is unknown or not installed here
         return False
-    return solver in KINDS[kind].solvers and solver in lane.solvers
+    return True
 
 
 def default_solver(method: Method, kind: str = SMOOTH) -> str:
@@ -228,11 +277,10 @@ def default_solver(method: Method, kind: str = SMOOTH) -> str:
     return next(s for s in SOLVERS if s in lane.solvers and s in KINDS[kind].solvers)
 
 
-def progress_shown(method: Method) -> bool:
-    """Whether a long run of ``method`` reports its progress on standard error."""
-    return any(lane.progress for lane in _lanes_running(method))
-
-
-def keeps_every_step(method: Method) -> bool:
-    """Whether ``method`` keeps the state of every step (the compiled RK4 run)."""
-    return any(lane.keeps_every_step for lane in _lanes_running(method))
+def fitting(lanes: tuple[Lane, ...], every_step_fits: bool) -> tuple[Lane, ...]:
+    """``lanes`` without those that keep every step, when every step's state would not fit in memory (unless
+    no other lane is left: the caller refuses the run then)."""
+    if every_step_fits:
+        return lanes
+    thinning = tuple(lane for lane in lanes if not lane.keeps_every_step)
+    return thinning or lanes

@@ -12,6 +12,7 @@ returned with ``status="failed"`` and the message (``throw=False``).
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -52,6 +53,7 @@ def simulate(
     throw: bool = True,
     rest_speed: float = 1e-6,
     max_events: int = 10_000,
+    lane: str | None = None,
 ) -> Trajectory:
     """Integrate ``model`` from ``(q0, v0)`` at ``t0`` to ``t_end``.
 
@@ -67,9 +69,13 @@ def simulate(
     dt : float
         Step for fixed-step methods (and, if given, the first and largest step of adaptive ones).
     method : str
-        Default ``"rk4"`` (``"DOP853"`` for a model with unilateral contacts, whose events only
-        adaptive methods locate). See :func:`gausspp.methods.names`: ``"rk4"``, ``"symplectic-euler"``, ``"RK45"``,
-        ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"rk4-compiled"``, ``"cvodes"``.
+        The integrator. Default: without ``dt``, ``"DOP853"`` (adaptive, to ``rtol`` and ``atol``); with ``dt``,
+        ``"rk4"`` (``"DOP853"`` for a model with unilateral contacts, whose events only adaptive methods
+        locate). See :func:`gausspp.methods.names`: ``"rk4"``, ``"symplectic-euler"``, ``"RK45"``,
+        ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"rk4-compiled"``, ``"cvodes"``. Where the method runs is
+        gausspp's choice (:mod:`gausspp.simulation.lanes`): ``"rk4"`` runs as one compiled casadi graph
+        (as ``"rk4-compiled"``) unless something needs Python — bounded actuators or redundant rows, a QP
+        backend outside casadi — and from Python then; ``Trajectory.lane`` says which.
     solver : {"qp", "direct"}
         How each step is solved; ``backend`` picks the QP backend.
     stabilize : None, "baumgarte", "project", Baumgarte, or a list of these
@@ -85,21 +91,51 @@ def simulate(
     rest_speed, max_events :
         Unilateral contacts only (:mod:`gausspp.simulation.contacts`): an impact that would leave a contact
         slower than ``rest_speed`` ends in rest; a run with more than ``max_events`` events stops.
+    lane : str, optional
+        Run in this lane of :data:`gausspp.simulation.lanes.LANES` (``"python"``, ``"compiled"``,
+        ``"scipy"``, ``"cvodes"``, ``"events"``) instead of the fastest that can; e.g. ``method="rk4",
+        lane="python"`` steps from Python (progress on standard error, the step's checks at every stage).
 
     Returns
     -------
     Trajectory
     """
     opts = check_options(
-        model, method, t0, t_end, dt, solver, backend, rtol, atol, record, constraint_tol, throw, rest_speed, max_events
+        model,
+        method,
+        t0,
+        t_end,
+        dt,
+        solver,
+        backend,
+        rtol,
+        atol,
+        record,
+        constraint_tol,
+        throw,
+        rest_speed,
+        max_events,
+        lane,
     )
     if model.contacts:
-        return run_contacts(model, q0, v0, lam0, stabilize, opts)
+        return _labelled("events", lambda: run_contacts(model, q0, v0, lam0, stabilize, opts))
     stab = as_stabilization(stabilize, opts.dt)
-    y0, redundant, lane = _start(model, q0, v0, lam0, stab, opts)
+    y0, redundant, chosen = _start(model, q0, v0, lam0, stab, opts)
     rhs = _right_hand_side(model, opts, stab, redundant)
-    samples = _run(lane, rhs, model, stab, opts, y0, redundant)
-    return recording.finish(recording.record_smooth(model, rhs, samples), samples.failure, opts.throw)
+    samples = _run(chosen, rhs, model, stab, opts, y0, redundant)
+    return _labelled(
+        chosen.name, lambda: recording.finish(recording.record_smooth(model, rhs, samples), samples.failure, opts.throw)
+    )
+
+
+def _labelled(lane: str, run: Callable[[], Trajectory]) -> Trajectory:
+    """The trajectory ``run`` returns, or carries on the error it raises, with ``lane`` (the lane that ran it)."""
+    try:
+        return replace(run(), lane=lane)
+    except GaussppError as exc:
+        if isinstance(getattr(exc, "trajectory", None), Trajectory):
+            exc.trajectory = replace(exc.trajectory, lane=lane)  # type: ignore[attr-defined]
+        raise
 
 
 def _start(
@@ -112,7 +148,7 @@ def _start(
     if stab.project:
         q, v = project_initial(model, opts.t0, q, v, lam, opts.constraint_tol, redundant)
     check_on_constraint(model, opts.t0, q, v, lam, opts.constraint_tol)
-    lane = lanes.check_kind(opts.method, lanes.kind_of(model, redundant), opts.solver, stab.project)
+    lane = lanes.check_kind(opts.method, lanes.kind_of(model, redundant), opts.solver, stab.project, opts.lanes)
     return np.concatenate([q, v, lam, [0.0, 0.0]]), redundant, lane
 
 

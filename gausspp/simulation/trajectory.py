@@ -42,6 +42,10 @@ class Trajectory:
     message : str
         Why a run failed (empty on success).
     method, solver : str
+    lane : str
+        The lane that ran the method (:mod:`gausspp.simulation.lanes`): ``"compiled"`` (the whole run as
+        one casadi graph), ``"python"`` (fixed steps from Python), ``"scipy"``, ``"cvodes"`` or
+        ``"events"`` (contact phases); ``""`` for a trajectory not made by :func:`gausspp.simulate`.
     steps, rhs_evaluations : int
     contact_force : (N, n_contact_rows) array
         Multipliers of unilateral contacts (≥ 0; empty second axis without contacts).
@@ -85,6 +89,7 @@ class Trajectory:
     saturated: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=bool))
     events: tuple[dict[str, Any], ...] = ()
     gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    lane: str = ""
 
     @property
     def success(self) -> bool:
