@@ -11,8 +11,12 @@ import numpy as np
 from ..errors import NonFiniteError
 from ..model.model import Model
 from ..step import qp
+from ..step.expressions import OUTPUTS
 from ..step.general import check_backend
+from ..step.kernel import Bound, CompiledKernel
 from ..step.outcome import QP_TOLERANCE, Where, evaluation_failed, step_margin, to_result
+from ..step.realizability import stacked_margins
+from ..workspace import workspace
 from .drift import Stabilization
 
 
@@ -81,6 +85,43 @@ class RightHandSide(_StateDerivative):
             where = Where(float(t), self.solver, m.groups, lambda: m.step_data(t, q, v, lam))
             to_result(dict(out), where, margin_warn=0.0, margin_error=m.margin_error)
         return out
+
+    def evaluate_all(self, t: np.ndarray, y: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray, int]:
+        """The unstabilized step at every sample ``(t_i, y_i)`` at once: the compiled step mapped over the ``n``
+        samples (``Function.map``), one call on the ``(nq + nv + nλ) × n`` matrix of states.
+
+        Returns each output stacked along a first axis (``(n, rows, cols)``), each sample's margin
+        (:func:`~gausspp.step.realizability.stacked_margins`) and how many leading samples pass the checks of
+        :meth:`evaluate`; the first that does not (and the rest) are left to :meth:`evaluate`, which raises the
+        error that explains. ``0`` samples for a QP solved from Python, or when casadi refuses the call.
+        """
+        n, kernel = t.size, self.kernel
+        if not isinstance(kernel, CompiledKernel) or n == 0:
+            return {}, np.zeros(0), 0
+        sq, sv, sl = self._slices
+        mapped = workspace(kernel).get(("mapped step", n), lambda: Bound(kernel.function.map(n)))
+        args = mapped.args  # column-major: sample after sample
+        args[0][:], args[4][:] = t, 0.0
+        args[1][:], args[2][:], args[3][:] = y[:, sq].ravel(), y[:, sv].ravel(), y[:, sl].ravel()
+        try:
+            mapped.eval()
+        except RuntimeError:
+            return {}, np.zeros(0), 0
+        self.evaluations += n
+        out = {name: _stacked(r, shape, n) for name, r, shape in zip(OUTPUTS, mapped.res, mapped.shapes, strict=True)}
+        m = self.model
+        margin = stacked_margins(out["S_norm"], m.k, m.m)
+        ok = (out["pivot"][:, 0, 0] > 0) & np.isfinite(out["checksum"][:, 0, 0])  # as in evaluate, sample by sample
+        ok &= (out["qp_primal"][:, 0, 0] <= QP_TOLERANCE) & (margin >= m.margin_error)
+        good = n if ok.all() else int(np.argmin(ok))
+        return out, margin, good
+
+
+def _stacked(res: np.ndarray, shape: tuple[int, int], n: int) -> np.ndarray:
+    """A mapped output's buffer (``shape = (rows, n·cols)``: the samples side by side, column-major) as a view
+    ``(n, rows, cols)``."""
+    rows, all_cols = shape
+    return res.reshape(n, all_cols // n, rows).transpose(0, 2, 1)
 
 
 class GeneralRightHandSide(_StateDerivative):
