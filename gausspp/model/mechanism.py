@@ -60,7 +60,7 @@ class Mechanism(ABC):
         return q
 
     def normalize_array(self, q: np.ndarray) -> np.ndarray:
-        """:meth:`normalize` on numbers."""
+        """:meth:`normalize` on numbers: one configuration ``(nq,)``, or one per row ``(N, nq)``."""
         return q
 
     def variation_matrix(self) -> ca.SX:
@@ -281,8 +281,8 @@ class RigidBody(Mechanism):
         return q / ca.norm_2(q)
 
     def normalize_array(self, q: np.ndarray) -> np.ndarray:
-        """Unit quaternion: ``q / |q|``."""
-        return q / np.linalg.norm(q)
+        """Unit quaternion: ``q / |q|`` (of each row for an ``(N, 4)`` array)."""
+        return q / np.linalg.norm(q, axis=-1, keepdims=True)
 
     def variation_matrix(self) -> ca.SX:
         """``δω = η̇ + ω × η`` for an angular variation ``η`` in body axes."""

@@ -119,15 +119,15 @@ def touches_zero(ts: np.ndarray, margin: np.ndarray, floor: float) -> tuple[int,
     """First strict local minimum of the sampled margin whose parabola through it and its neighbours dips
     below ``floor``: a margin that touches zero between samples without changing the sign of det S (the
     crane's ``sin²θ``). Returns the sample index and the estimated time, or ``None``."""
-    for i in range(1, margin.size - 1):
+    inner = margin[1:-1]  # only an already small strict minimum is suspect
+    suspects = np.flatnonzero((inner < SMALL_MARGIN) & (inner < margin[:-2]) & (inner < margin[2:])) + 1
+    for i in suspects:
         m0, m1, m2 = margin[i - 1 : i + 2]
-        if not (m1 < SMALL_MARGIN and m1 < m0 and m1 < m2):  # only an already small minimum is suspect
-            continue
         t0, t1, t2 = ts[i - 1 : i + 2]
         a, b, c = np.polyfit([t0 - t1, 0.0, t2 - t1], [m0, m1, m2], 2)
         if a <= 0:
             continue
         vertex = -b / (2 * a)
         if c - b * b / (4 * a) < floor and t0 - t1 <= vertex <= t2 - t1:
-            return i, float(t1 + vertex)
+            return int(i), float(t1 + vertex)
     return None

@@ -21,9 +21,10 @@ import numpy as np
 
 from ..errors import GaussppError, IntegrationError, NonFiniteError, RealizabilityError, RealizabilityWarning
 from ..model.model import Model
+from ..step.realizability import stacked_margins
 from .contacts import gaps, phase_step
 from .margins import SMALL_MARGIN, audit
-from .rhs import AnyRightHandSide, GeneralRightHandSide
+from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
 from .trajectory import Trajectory
 
@@ -49,50 +50,69 @@ class Columns:
     def fill(self, i: int, out: dict[str, np.ndarray], active: tuple[int, ...], sub_k: int, sub_m: int) -> None:
         """Row ``i`` from the step outputs ``out`` of a model with ``sub_k`` rows and ``sub_m`` columns whose
         extra rows are the ``active`` contacts."""
-        model = self.model
-        m, k = model.m, model.k
-        self.a[i] = out["a"].ravel()
-        u = out["u"].ravel()
-        self.u[i] = u[:m]
-        if active:
-            self.contact_force[i, list(active)] = u[m:]
-        self.reaction[i] = out["reaction"].ravel()
-        self.compulsion[i] = float(out["compulsion"][0])
-        self.residual[i] = out["Phi"].ravel()[:k]
-        self.g[i] = out["g"].ravel()[:k]
-        if k:
-            self.S[i] = np.asarray(out["S_norm"]).reshape(sub_k, sub_m)[:k, :m]
-        if model.has_energy:
-            self.energy[i] = float(out["energy"][0])
-        if self.general:
-            self.tracking_error[i] = float(out["tracking_error"][0])
-            self.saturated[i] = np.asarray(out["saturated"], bool).ravel()
-        self.kept = i + 1
+        row = {name: np.asarray(out[name])[None] for name in self.names}
+        row["S_norm"] = np.asarray(out["S_norm"]).reshape(1, sub_k, sub_m)
+        self.fill_rows(i, row, active)
 
-    def margin(self) -> np.ndarray:
-        """``σ_min`` of each sample's normalized ``S`` (1 without bilateral rows, 0 with more rows than columns)."""
-        n, k, m = self.kept, self.model.k, self.model.m
-        if k == 0:
-            return np.ones(n)
-        if m < k or n == 0:
-            return np.zeros(n)
-        return np.linalg.svd(self.S[:n], compute_uv=False).min(axis=1)
+    @property
+    def names(self) -> list[str]:
+        """The step outputs the columns are filled from."""
+        extra = (["energy"] if self.model.has_energy else []) + (
+            ["tracking_error", "saturated"] if self.general else []
+        )
+        return ["a", "u", "reaction", "compulsion", "Phi", "g", "S_norm", *extra]
+
+    def fill_rows(self, start: int, out: dict[str, np.ndarray], active: tuple[int, ...] = ()) -> None:
+        """Rows ``start, start + 1, …`` from step outputs stacked along a first axis, one entry per sample
+        (``S_norm``: ``(n, sub_k, sub_m)``, the extra rows and columns being the ``active`` contacts)."""
+        model, n = self.model, out["a"].shape[0]
+        m, k, rows = model.m, model.k, slice(start, start + n)
+
+        def flat(name: str) -> np.ndarray:
+            return out[name].reshape(n, -1)
+
+        self.a[rows], self.reaction[rows] = flat("a"), flat("reaction")
+        u = flat("u")
+        self.u[rows] = u[:, :m]
+        if active:
+            self.contact_force[rows, list(active)] = u[:, m:]
+        self.compulsion[rows] = flat("compulsion")[:, 0]
+        self.residual[rows], self.g[rows] = flat("Phi")[:, :k], flat("g")[:, :k]
+        if k:
+            self.S[rows] = out["S_norm"][:, :k, :m]
+        if model.has_energy:
+            self.energy[rows] = flat("energy")[:, 0]
+        if self.general:
+            self.tracking_error[rows] = flat("tracking_error")[:, 0]
+            self.saturated[rows] = flat("saturated").astype(bool)
+        self.kept = start + n
+
+    def margin(self, known: np.ndarray | None = None) -> np.ndarray:
+        """The margin ``σ_min`` of each kept sample's normalized ``S``; the first ones may be ``known`` already."""
+        known = np.zeros(0) if known is None else known
+        rest = stacked_margins(self.S[known.size : self.kept], self.model.k, self.model.m)
+        return np.concatenate([known, rest])
 
 
 def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples) -> Recorded:
     """The trajectory of a smooth run, its margin audited; samples past a lost margin are dropped."""
     y = samples.y.copy()
-    nq, normalize = model.nq, model.mechanism.normalize_array
-    for row in y:  # adaptive lanes integrate q freely: bring samples back onto the manifold (unit quaternions)
-        row[:nq] = normalize(row[:nq])
+    # adaptive lanes integrate q freely: bring the samples back onto the manifold (unit quaternions)
+    y[:, : model.nq] = model.mechanism.normalize_array(y[:, : model.nq])
     samples = replace(samples, y=y)
     general = isinstance(rhs, GeneralRightHandSide)
 
     def evaluate(i: int) -> tuple[dict[str, np.ndarray], tuple[int, ...], int, int]:
         return rhs.evaluate(samples.t[i], y[i], stabilized=False), (), model.k, model.m
 
-    cols, failure = _columns(model, samples, evaluate, general)
-    margin = cols.margin()
+    cols, known = Columns(model, samples.t.size, general), None
+    if isinstance(rhs, RightHandSide):  # the samples that pass all at once, the rest (if any) one by one
+        out, margin, good = rhs.evaluate_all(samples.t, y)
+        if good:
+            cols.fill_rows(0, {name: out[name][:good] for name in cols.names})
+            known = margin[:good]
+    failure = _fill(cols, evaluate, cols.kept)
+    margin = cols.margin(known)
     kept, failure, notes = audit(model, rhs, samples.t[: cols.kept], y, cols.S[: cols.kept], margin, failure)
     return _trajectory(model, samples, cols, margin, kept), failure, notes
 
@@ -109,20 +129,21 @@ def record_contacts(model: Model, samples: Samples) -> Recorded:
         out = sub.kernel(solver, backend)(samples.t[i], y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], np.zeros(2))
         return out, active_of[i], sub.k, sub.m
 
-    cols, failure = _columns(model, samples, evaluate, False)
+    cols = Columns(model, samples.t.size, False)
+    failure = _fill(cols, evaluate, 0)
     return _trajectory(model, samples, cols, cols.margin(), cols.kept), failure, []
 
 
-def _columns(model: Model, samples: Samples, evaluate: Evaluate, general: bool) -> tuple[Columns, Exception | None]:
-    """Evaluate every sample; stop at the first that fails (its error is the recording's failure)."""
-    cols = Columns(model, samples.t.size, general)
-    for i in range(samples.t.size):
+def _fill(cols: Columns, evaluate: Evaluate, start: int) -> Exception | None:
+    """Evaluate the samples from ``start`` on, one by one; stop at the first that fails (its error is the
+    recording's failure)."""
+    for i in range(start, cols.a.shape[0]):
         try:
             out, active, sub_k, sub_m = evaluate(i)
         except GaussppError as exc:
-            return cols, exc
+            return exc
         cols.fill(i, out, active, sub_k, sub_m)
-    return cols, None
+    return None
 
 
 def _trajectory(model: Model, samples: Samples, cols: Columns, margin: np.ndarray, n: int) -> Trajectory:

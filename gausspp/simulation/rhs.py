@@ -11,8 +11,12 @@ import numpy as np
 from ..errors import NonFiniteError
 from ..model.model import Model
 from ..step import qp
+from ..step.expressions import OUTPUTS
 from ..step.general import check_backend
+from ..step.kernel import Bound, CompiledKernel
 from ..step.outcome import QP_TOLERANCE, Where, evaluation_failed, step_margin, to_result
+from ..step.realizability import stacked_margins
+from ..workspace import workspace
 from .drift import Stabilization
 
 
@@ -81,6 +85,65 @@ class RightHandSide(_StateDerivative):
             where = Where(float(t), self.solver, m.groups, lambda: m.step_data(t, q, v, lam))
             to_result(dict(out), where, margin_warn=0.0, margin_error=m.margin_error)
         return out
+
+    def evaluate_all(self, t: np.ndarray, y: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray, int]:
+        """The unstabilized step at every sample ``(t_i, y_i)`` at once: the compiled step mapped over
+        :data:`CHUNK` samples (``Function.map``), one call per chunk of the ``(nq + nv + nλ) × n`` matrix of states.
+
+        Returns each output stacked along a first axis (``(n, rows, cols)``), each sample's margin
+        (:func:`~gausspp.step.realizability.stacked_margins`) and how many leading samples pass the checks of
+        :meth:`evaluate`; the first that does not (and the rest) are left to :meth:`evaluate`, which raises the
+        error that explains. ``0`` samples for a QP solved from Python.
+        """
+        kernel = self.kernel
+        if not isinstance(kernel, CompiledKernel) or t.size == 0:
+            return {}, np.zeros(0), 0
+        out, n = _mapped(kernel, t, y, self._slices)
+        self.evaluations += n
+        m = self.model
+        margin = stacked_margins(out["S_norm"][:n], m.k, m.m)
+        ok = (out["pivot"][:n, 0, 0] > 0) & np.isfinite(out["checksum"][:n, 0, 0])  # as evaluate, sample by sample
+        ok &= (out["qp_primal"][:n, 0, 0] <= QP_TOLERANCE) & (margin >= m.margin_error)
+        good = n if ok.all() else int(np.argmin(ok))
+        return out, margin, good
+
+
+#: Samples per call of the mapped step (one mapped function per kernel, whatever the number of samples).
+CHUNK = 128
+
+
+def _mapped(
+    kernel: CompiledKernel, t: np.ndarray, y: np.ndarray, slices: tuple[slice, slice, slice]
+) -> tuple[dict[str, np.ndarray], int]:
+    """The step's outputs at the samples, :data:`CHUNK` at a time (the last chunk padded with the last sample);
+    how many were evaluated (fewer if casadi refused a chunk: the samples from it on are left out)."""
+    mapped = workspace(kernel).get(("mapped step", CHUNK), lambda: Bound(kernel.function.map(CHUNK)))
+    fn, n = kernel.function, t.size
+    out = {name: np.empty((n, *fn.size_out(i))) for i, name in enumerate(OUTPUTS)}
+    args, (sq, sv, sl) = mapped.args, slices  # the inputs column-major: sample after sample
+    args[4][:] = 0.0
+    for start in range(0, n, CHUNK):
+        stop, rows = min(start + CHUNK, n), np.minimum(np.arange(start, start + CHUNK), n - 1)
+        args[0][:], args[1][:], args[2][:], args[3][:] = (
+            t[rows],
+            y[rows, sq].ravel(),
+            y[rows, sv].ravel(),
+            y[rows, sl].ravel(),
+        )
+        try:
+            mapped.eval()
+        except RuntimeError:
+            return out, start
+        for name, res, shape in zip(OUTPUTS, mapped.res, mapped.shapes, strict=True):
+            out[name][start:stop] = _stacked(res, shape, CHUNK)[: stop - start]
+    return out, n
+
+
+def _stacked(res: np.ndarray, shape: tuple[int, int], n: int) -> np.ndarray:
+    """A mapped output's buffer (``shape = (rows, n·cols)``: the samples side by side, column-major) as a view
+    ``(n, rows, cols)``."""
+    rows, all_cols = shape
+    return res.reshape(n, all_cols // n, rows).transpose(0, 2, 1)
 
 
 class GeneralRightHandSide(_StateDerivative):

@@ -11,7 +11,7 @@ fewer reaction directions than rows (``k > m``: ``S`` cannot have rank ``k``).
 
 Every margin of the package comes from here: from the data (:func:`cosines`, :func:`margin`,
 :func:`cosines_and_margin`), from a kernel's ``S_norm`` (:func:`singular_values`,
-:func:`step_margin`), inside a casadi graph (:func:`margin_bound`), all through the one rule
+:func:`step_margin`, :func:`stacked_margins`), inside a casadi graph (:func:`margin_bound`), all through the one rule
 :func:`margin_of`.
 """
 
@@ -86,6 +86,21 @@ def step_margin(S_norm: np.ndarray, k: int, m: int) -> float:
     if k == 0 or k > m:
         return margin_of(np.zeros(0), k, m)
     return margin_of(singular_values(S_norm, k, m), k, m)
+
+
+def stacked_margins(S_norm: np.ndarray, k: int, m: int) -> np.ndarray:
+    """:func:`step_margin` of each of ``n`` normalized ``S`` stacked as an ``(n, k, m)`` array, at once: the length
+    of the row for ``k = 1``, the smallest singular value of a batched SVD otherwise (1 if ``k = 0``, 0 if
+    ``k > m``, NaN for a sample with NaN or inf in its ``S``)."""
+    n = S_norm.shape[0]
+    if k == 0 or k > m or n == 0:
+        return np.full(n, margin_of(np.zeros(0), k, m))
+    if k == 1:
+        return np.sqrt(np.einsum("ij,ij->i", S_norm[:, 0, :], S_norm[:, 0, :]))
+    out = np.full(n, np.nan)  # NaN in, NaN out (as margin_of): the SVD is not even tried on those
+    finite = np.isfinite(S_norm).all(axis=(1, 2))
+    out[finite] = np.linalg.svd(S_norm[finite], compute_uv=False)[:, -1]
+    return out
 
 
 def margin_bound(S: ca.SX, k: int, m: int) -> ca.SX:
