@@ -176,7 +176,7 @@ def _compiled_run(
 ) -> tuple[ca.Function, ca.Function]:
     """The step and the whole-run ``mapaccum`` function, built once per model and setting and kept in the model's
     workspace."""
-    key = (solver, backend, meth.name, stab.project)
+    key = (solver, backend, meth.tableau, stab.project)  # the tableau, not the name: rk4 and rk4-compiled share it
 
     def build_step() -> ca.Function:
         assert meth.tableau is not None
