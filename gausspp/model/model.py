@@ -217,8 +217,13 @@ class Model:
             ``margin_error``).
         NotPositiveDefiniteError, NonFiniteError, ShapeError, QPSolveError
         """
-        t, q, v, lam = self.checked_state(t, q, v, lam)
         refine = self.refine if refine is None else bool(refine)
+        fast = checked.checked_call(self, solver, backend, refine)
+        if fast is not None:
+            result = fast(t, q, v, lam)
+            if result is not None:
+                return result
+        t, q, v, lam = self.checked_state(t, q, v, lam)
         return checked.checked_step(self, t, q, v, lam, solver, backend, refine)
 
     def general_step(

@@ -16,7 +16,7 @@ from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError,
 from ..model.model import Model
 from ..step import realizability
 from ..step.expressions import OUTPUTS, reduce
-from ..step.kernel import CompiledKernel
+from ..step.kernel import CompiledKernel, only_outputs
 from ..step.qp.casadi_conic import stdout_silenced
 from ..step.realizability import MARGIN_BOUND_ROWS
 from ..workspace import workspace
@@ -29,13 +29,6 @@ from .rhs import RightHandSide
 MAX_CVODES_STEPS = 100_000
 
 _RHS_OUTPUTS = [OUTPUTS.index(k) for k in ("qdot", "a", "u", "power_reaction", "power_forces")]
-
-
-def _only(fn: ca.Function, outputs: list[int]) -> ca.Function:
-    """An SX function computing only the chosen outputs (the rest is dropped from the graph)."""
-    args = fn.sx_in()
-    res = fn.call(args)
-    return ca.Function(f"{fn.name()}_part", args, [res[i] for i in outputs])
 
 
 def rhs_function(model: Model, solver: str, backend: str | None) -> ca.Function:
@@ -51,12 +44,9 @@ def rhs_function(model: Model, solver: str, backend: str | None) -> ca.Function:
     t, y, stab = ca.MX.sym("t"), ca.MX.sym("y", nq + nv + nl + 2), ca.MX.sym("stab", 2)
     args = [t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], stab]
     if kernel.qp_parts is None:
-        qdot, a, u, pR, pF = _only(kernel.function, _RHS_OUTPUTS)(*args)
+        qdot, a, u, pR, pF = only_outputs(kernel.function, _RHS_OUTPUTS)(*args)
     else:
-        build, finish, qp_backend = kernel.qp_parts
-        H, S, rhs = build(*args)
-        z, mult = qp_backend.graph(H, S, rhs)
-        qdot, a, u, pR, pF = _only(finish, _RHS_OUTPUTS)(*args, z, mult)
+        qdot, a, u, pR, pF = kernel.qp_parts.graph(args, only=_RHS_OUTPUTS)
     lam_dot = ca.vertcat(*[u[i] for i in model.lam_columns]) if model.lam_columns else ca.MX(0, 1)
     F = ca.Function("rhs", [t, y, stab], [ca.vertcat(qdot, a, lam_dot, pR, pF)])
     return F.expand() if kernel.qp_parts is None else F

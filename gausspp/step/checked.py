@@ -14,9 +14,10 @@ import numpy as np
 from ..errors import GaussppError, InputError, QPSolveError, RealizabilityError, UnknownNameError
 from ..workspace import workspace
 from . import qp
+from .checked_call import CheckedCall
 from .data import NO_STAB, evaluate
 from .general_step import solve_at
-from .kernel import Kernel, build_kernel
+from .kernel import CompiledKernel, Kernel, build_kernel
 from .outcome import Where, evaluation_failed, to_result, warn_small_margin
 from .problem import StepProblem
 from .protocol import StepModel
@@ -52,6 +53,25 @@ def kernel_for(model: StepModel, solver: str, backend: str | qp.QPBackend | None
     if chosen is not None and getattr(kernel, "backend", chosen) is not chosen:  # a backend object given anew
         kernel = ws.put(key, build_kernel("step", model.inputs, model.expressions, solver, chosen, refine))
     return kernel
+
+
+def checked_call(model: StepModel, solver: str, backend: object, refine: bool) -> CheckedCall | None:
+    """The hot path of ``model.step`` for ``solver`` (:mod:`gausspp.step.checked_call`), built on first use and
+    kept; ``None`` where only the full route applies (contacts, bounds, a QP solved from Python, an unknown
+    solver or a backend given as an object — the full route then also reports any error)."""
+    if model.contacts or model.bounded or solver not in SOLVERS or not (backend is None or type(backend) is str):
+        return None
+    if solver == "direct" and backend is not None:
+        return None
+
+    def build() -> CheckedCall | None:
+        kernel = kernel_for(model, solver, backend, refine)
+        if not isinstance(kernel, CompiledKernel):
+            return None
+        name = "direct" if solver == "direct" else qp.get(backend).name
+        return CheckedCall(kernel, model.k, model.m, model.lam0, name, model.margin_warn)
+
+    return workspace(model).get(("checked call", solver, backend, refine), build)
 
 
 def step_problem(model: StepModel, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> StepProblem:

@@ -158,7 +158,7 @@ def _refine(p: StepExpressions, red: Reduced, z: ca.SX, u: ca.SX, a: ca.SX) -> t
     return z + dz, u + du, a + Ainv_r1 + red.AinvD @ du
 
 
-def _well_conditioned_constant(A: ca.SX) -> bool:
+def well_conditioned_constant(A: ca.SX) -> bool:
     """A constant ``A`` with ``cond(A) < 10⁴`` loses at most ~1e-12 to the cancellation: no refinement needed."""
     if not A.is_constant():
         return False
@@ -175,7 +175,7 @@ def outputs(p: StepExpressions, red: Reduced, z: ca.SX, y: ca.SX | None, refine:
     z_solver = z
     u = ca.solve(red.RD, z)
     a = red.a0 + red.AinvD @ u
-    if refine and red.S_hat.shape[0] == red.S_hat.shape[1] and not _well_conditioned_constant(p.A):
+    if refine and red.S_hat.shape[0] == red.S_hat.shape[1] and not well_conditioned_constant(p.A):
         z, u, a = _refine(p, red, z, u, a)
     if y is None:
         primal = dual = ca.SX(0)

@@ -60,3 +60,7 @@ class StepModel(Protocol):
     contact_tol: float
     nq: int
     nv: int
+
+    @property
+    def lam0(self) -> np.ndarray | None:
+        """``λ`` when the caller gives none (``None``: it must be given)."""

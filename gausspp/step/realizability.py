@@ -11,8 +11,8 @@ fewer reaction directions than rows (``k > m``: ``S`` cannot have rank ``k``).
 
 Every margin of the package comes from here: from the data (:func:`cosines`, :func:`margin`,
 :func:`cosines_and_margin`), from a kernel's ``S_norm`` (:func:`singular_values`,
-:func:`step_margin`, :func:`stacked_margins`), inside a casadi graph (:func:`margin_bound`), all through the one rule
-:func:`margin_of`.
+:func:`step_margin`, :func:`stacked_margins`), inside a casadi graph (:func:`margin_bound`, and exactly for one or two
+rows :func:`graph_cosines`), all through the one rule :func:`margin_of`.
 """
 
 from __future__ import annotations
@@ -116,3 +116,35 @@ def margin_bound(S: ca.SX, k: int, m: int) -> ca.SX:
         return ca.SX(margin_of(np.zeros(0), k, m))
     G = S @ S.T
     return 1 / ca.sqrt(ca.trace(ca.solve(G, ca.SX.eye(k)))) if k > 1 else ca.sqrt(G[0, 0])
+
+
+#: Up to this many constraint rows :func:`graph_cosines` gives the cosines in closed form inside a graph.
+GRAPH_COSINE_ROWS = 2
+
+
+def graph_cosines(S: ca.SX, k: int, m: int) -> ca.SX | None:
+    """In a casadi graph: the singular values of the normalized ``S`` (k × m), largest first, for ``k ≤ 2``.
+
+    casadi has no SVD node; for one or two rows the values have a closed form as accurate as an SVD
+    (absolute error of order ``ε σ₁``). With ``s = σ₁ + σ₂``, ``g = σ₁² − σ₂²`` and ``P = σ₁σ₂``:
+
+    * ``P² = det(S Sᵀ) = Σ_{i<j} (S₀ᵢS₁ⱼ − S₀ⱼS₁ᵢ)²`` (Cauchy–Binet: a sum of squares, no cancellation);
+    * ``s² = ‖S‖²_F + 2P``; ``g = √((G₀₀ − G₁₁)² + 4G₀₁²)`` with ``G = S Sᵀ`` (the eigenvalue gap of ``G``);
+    * ``σ₁ = (s + g/s) / 2`` and ``σ₂ = P / σ₁`` (never ``s − …``: no subtraction of nearly equal numbers).
+
+    One row: its length. ``m = 1`` with two rows: one value, the column's length. ``None`` for more than
+    :data:`GRAPH_COSINE_ROWS` rows (use :func:`singular_values` on the numbers). A zero ``S`` gives zeros.
+    """
+    if k == 0 or k > GRAPH_COSINE_ROWS:
+        return None
+    if k == 1 or m == 1:
+        return ca.sqrt(ca.sumsqr(S))
+    r0, r1 = S[0, :], S[1, :]
+    g00, g11, g01 = ca.dot(r0, r0), ca.dot(r1, r1), ca.dot(r0, r1)
+    minors = [r0[i] * r1[j] - r0[j] * r1[i] for i in range(m) for j in range(i + 1, m)]
+    P = ca.sqrt(sum(x * x for x in minors))
+    s = ca.sqrt(g00 + g11 + 2 * P)
+    g = ca.sqrt((g00 - g11) ** 2 + 4 * g01 * g01)
+    s1 = ca.if_else(s > 0, (s + g / s) / 2, 0)
+    s2 = ca.if_else(s1 > 0, P / s1, 0)
+    return ca.vertcat(s1, s2)
