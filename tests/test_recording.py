@@ -15,7 +15,7 @@ COLUMNS = ("a", "u", "reaction", "compulsion", "residual", "g", "margin", "energ
 class OneByOne(RightHandSide):
     """The same right-hand side, recorded sample by sample (nothing evaluated at once)."""
 
-    def evaluate_all(self, t, y):
+    def evaluate_all(self, t, y, solutions=None):
         return {}, np.zeros(0), 0
 
 
@@ -53,3 +53,29 @@ def test_a_failing_sample_fails_as_sample_by_sample():
     assert type(fast_failure) is type(slow_failure) and str(fast_failure) == str(slow_failure)
     assert fast.t.size == slow.t.size == 7
     np.testing.assert_allclose(fast.a, slow.a, rtol=1e-12, atol=1e-12)
+
+
+@pytest.mark.parametrize("scene", ["pendulum", "gyrostat"])
+def test_a_compiled_qp_run_is_recorded_by_replaying_its_own_qp_solutions(scene):
+    """The run hands each sample's QP solution to the recording, which replays the step from it (no QP solved
+    again): the same columns as solving each sample's QP anew; a wrong solution would show."""
+    sc = gp.scenes.get(scene)
+    model = sc.model
+    traj = gp.simulate(model, sc.q0, sc.v0, 0.3, dt=1e-3, method="rk4-compiled", solver="qp", record=7)
+    samples = samples_of(model, traj)
+    from gausspp.simulation.compiled import integrate_compiled
+    from gausspp.simulation.methods import get as method
+
+    y0 = samples.y[0]
+    t, y, *_, solutions = integrate_compiled(
+        method("rk4-compiled"), model, "qp", None, Stabilization(), 0.0, 0.3, 1e-3, y0, 1e-8, 1e-8, 7
+    )
+    assert solutions is not None and np.isfinite(solutions[:-1]).all() and np.isnan(solutions[-1]).all()
+    rhs = RightHandSide(model, "qp", None, Stabilization())
+    replayed, _, good = rhs.evaluate_all(t, y, solutions)
+    solved, _, good_solved = rhs.evaluate_all(t, y)
+    assert good == good_solved == t.size
+    for name in ("a", "u", "reaction", "compulsion", "residual", "qp_primal"):
+        np.testing.assert_allclose(replayed[name], solved[name], rtol=1e-12, atol=1e-13, err_msg=name)
+    wrong, _, _ = rhs.evaluate_all(t, y, solutions * (1 + 1e-6))
+    assert not np.allclose(wrong["a"], solved["a"], rtol=1e-12, atol=1e-13)

@@ -31,11 +31,13 @@ MAX_CVODES_STEPS = 100_000
 _RHS_OUTPUTS = [OUTPUTS.index(k) for k in ("qdot", "a", "u", "power_reaction", "power_forces")]
 
 
-def rhs_function(model: Model, solver: str, backend: str | None) -> ca.Function:
+def rhs_function(model: Model, solver: str, backend: str | None, *, with_solution: bool = False) -> ca.Function:
     """``F(t, y, stab) -> y'`` with ``y = (q, v, λ, W_R, W_F)``, the step inside the graph.
 
     With ``solver="direct"`` the result is a pure SX function (one flat instruction list); with
     a casadi QP backend an MX graph around the conic node, computing only what ``y'`` needs.
+    ``with_solution``: a second output, the QP's solution ``(z, y)`` (empty for the direct step), so that the
+    recording can replay the step without solving its QP again (:meth:`~gausspp.step.kernel.QPParts.replay`).
     """
     kernel = model.kernel(solver, backend)
     if not isinstance(kernel, CompiledKernel):
@@ -43,17 +45,20 @@ def rhs_function(model: Model, solver: str, backend: str | None) -> ca.Function:
     nq, nv, nl = model.nq, model.nv, model.n_lam
     t, y, stab = ca.MX.sym("t"), ca.MX.sym("y", nq + nv + nl + 2), ca.MX.sym("stab", 2)
     args = [t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], stab]
+    solution = ca.MX(0, 1)
     if kernel.qp_parts is None:
         qdot, a, u, pR, pF = only_outputs(kernel.function, _RHS_OUTPUTS)(*args)
     else:
-        qdot, a, u, pR, pF = kernel.qp_parts.graph(args, only=_RHS_OUTPUTS)
+        (qdot, a, u, pR, pF), solution = kernel.qp_parts.graph_and_solution(args, only=_RHS_OUTPUTS)
     lam_dot = ca.vertcat(*[u[i] for i in model.lam_columns]) if model.lam_columns else ca.MX(0, 1)
-    F = ca.Function("rhs", [t, y, stab], [ca.vertcat(qdot, a, lam_dot, pR, pF)])
+    outputs = [ca.vertcat(qdot, a, lam_dot, pR, pF), *([solution] if with_solution else [])]
+    F = ca.Function("rhs", [t, y, stab], outputs)
     return F.expand() if kernel.qp_parts is None else F
 
 
 def rk_step_function(model: Model, F: ca.Function, tableau: _methods.Tableau, stab: Stabilization) -> ca.Function:
-    """One explicit RK step of ``F`` as a casadi function ``(y, t, h, stab) -> (y', margin bound at the start)``."""
+    """One explicit RK step of ``F`` (:func:`rhs_function` ``with_solution``) as a casadi function
+    ``(y, t, h, stab) -> (y', margin bound at the start, the QP's solution at the start)``."""
     nq, nv, nl = model.nq, model.nv, model.n_lam
     t, h, y, s = ca.MX.sym("t"), ca.MX.sym("h"), ca.MX.sym("y", F.size1_in(1)), ca.MX.sym("stab", 2)
     stages: list[ca.MX] = []
@@ -62,7 +67,10 @@ def rk_step_function(model: Model, F: ca.Function, tableau: _methods.Tableau, st
         for a, k in zip(row, stages, strict=False):
             if a:
                 yi = yi + h * a * k
-        stages.append(F(t + c * h, yi, s))
+        derivative, solution = F(t + c * h, yi, s)
+        stages.append(derivative)
+        if not c:
+            start = solution  # the first stage: the step at (t, y) itself
     y1 = y
     for b, k in zip(tableau.b, stages, strict=True):
         y1 = y1 + h * b * k
@@ -71,7 +79,7 @@ def rk_step_function(model: Model, F: ca.Function, tableau: _methods.Tableau, st
     if stab.project:
         q1, v1 = projection_function(model)(t + h, q1, v1, lam1)
     y1 = ca.vertcat(q1, v1, lam1, y1[nq + nv + nl :])
-    step = ca.Function("rk_step", [y, t, h, s], [y1, margin_bound(model)(t, y)])
+    step = ca.Function("rk_step", [y, t, h, s], [y1, margin_bound(model)(t, y), start])
     try:
         flat = step.expand()  # direct path: one flat SX instruction list for the whole step ...
     except RuntimeError:
@@ -127,8 +135,10 @@ def integrate_compiled(
     rtol: float,
     atol: float,
     record: Any,
-) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int]:
-    """Run a compiled-lane method; return ``(t, Y, steps, failure, rhs evaluations)`` on the recorded grid."""
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int, np.ndarray | None]:
+    """Run a compiled-lane method; return ``(t, Y, steps, failure, rhs evaluations, QP solutions)`` on the recorded
+    grid. The QP solutions (one row per kept sample, NaN where no step starts) are those of each step's first stage,
+    the step at the sample itself — given only for a QP step without Baumgarte terms (``None`` otherwise)."""
     if meth.name == "cvodes":
         return _cvodes(model, rhs_function(model, solver, backend), solver, stab, t0, t_end, dt, y0, rtol, atol, record)
     assert meth.tableau is not None and dt is not None
@@ -138,11 +148,11 @@ def integrate_compiled(
     step, run = _compiled_run(model, solver, backend, meth, stab, n_steps)
     h, s = np.diff(times)[None, :], np.array(stab.stab)
     try:
-        Ys, bounds = run(y0, times[:-1][None, :], h, s)
+        Ys, bounds, starts = run(y0, times[:-1][None, :], h, s)
         Y = np.vstack([y0[None, :], np.array(Ys).T])
-        bounds = np.array(bounds).ravel()
+        bounds, solutions = np.array(bounds).ravel(), np.array(starts).T
     except RuntimeError:  # a QP plugin refused non-finite data somewhere: redo step by step to keep the prefix
-        Y, bounds = _step_by_step(step, y0, times, s)
+        Y, bounds, solutions = _step_by_step(step, y0, times, s)
     failure: Exception | None = None
     finite = np.isfinite(Y).all(axis=1)
     if Y.shape[0] < times.size or not finite.all():
@@ -158,7 +168,12 @@ def integrate_compiled(
         wanted = np.asarray(record, float)
         keep = _on_grid(times, wanted[wanted <= times[-1] + 1e-12] if failure else wanted)
     steps = times.size - 1
-    return times[keep], Y[keep], steps, failure, steps * len(meth.tableau.c)
+    kept_solutions = None
+    if solver != "direct" and not np.any(s):  # unstabilized: the first stage is the step the recording replays
+        kept_solutions = np.full((keep.size, solutions.shape[1]), np.nan)
+        starts_here = keep < solutions.shape[0]
+        kept_solutions[starts_here] = solutions[keep[starts_here]]
+    return times[keep], Y[keep], steps, failure, steps * len(meth.tableau.c), kept_solutions
 
 
 def _compiled_run(
@@ -170,7 +185,7 @@ def _compiled_run(
 
     def build_step() -> ca.Function:
         assert meth.tableau is not None
-        return rk_step_function(model, rhs_function(model, solver, backend), meth.tableau, stab)
+        return rk_step_function(model, rhs_function(model, solver, backend, with_solution=True), meth.tableau, stab)
 
     step = workspace(model).get(("compiled-step", *key), build_step)
     run = workspace(model).get(("compiled-run", *key, n_steps), lambda: step.mapaccum("run", n_steps))
@@ -179,18 +194,19 @@ def _compiled_run(
 
 def _step_by_step(
     step: ca.Function, y0: np.ndarray, times: np.ndarray, stab: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    ys, bounds = [y0], []
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    ys, bounds, solutions = [y0], [], []
     for t, t_next in zip(times[:-1], times[1:], strict=True):
         try:
-            y, bound = step(ys[-1], t, t_next - t, stab)
+            y, bound, solution = step(ys[-1], t, t_next - t, stab)
         except RuntimeError:
             break
         ys.append(np.array(y).ravel())
         bounds.append(float(bound))
+        solutions.append(np.array(solution).ravel())
         if not np.isfinite(ys[-1]).all():
             break
-    return np.array(ys), np.array(bounds)
+    return np.array(ys), np.array(bounds), np.array(solutions).reshape(len(solutions), step.nnz_out(2))
 
 
 def _diagnose(model: Model, solver: str, backend: str | None, t: float, y: np.ndarray, t_next: float) -> Exception:
@@ -231,7 +247,7 @@ def _cvodes(
     rtol: float,
     atol: float,
     record: Any,
-) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int]:
+) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int, None]:
     if np.isscalar(record):
         grid = np.arange(t0, t_end, dt) if dt else np.linspace(t0, t_end, 201)
         grid = np.append(grid[grid < t_end], t_end)
@@ -270,9 +286,9 @@ def _cvodes(
             f"CVODES stopped between t={grid[good]:.6g} and t={grid[bad]:.6g} ({str(exc).strip().splitlines()[-1]}); "
             "near a singular or very stiff state — check the realizability margin there"
         )
-        return grid[: good + 1], np.vstack([y0[None, :], prefix]), 0, failure, 0
+        return grid[: good + 1], np.vstack([y0[None, :], prefix]), 0, failure, 0, None
     stats = integrator.stats()
     steps = int(stats.get("nsteps", 0)) if isinstance(stats, dict) else 0
     evaluations = int(stats.get("nfevals", 0)) if isinstance(stats, dict) else 0
     Y = np.vstack([y0[None, :], xf])
-    return grid, Y, steps, None, evaluations
+    return grid, Y, steps, None, evaluations, None

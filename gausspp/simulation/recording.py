@@ -99,6 +99,7 @@ def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples) -> Reco
     y = samples.y.copy()
     # adaptive lanes integrate q freely: bring the samples back onto the manifold (unit quaternions)
     y[:, : model.nq] = model.mechanism.normalize_array(y[:, : model.nq])
+    solutions = samples.qp_solutions if np.array_equal(y, samples.y) else None  # replayed at the very same states
     samples = replace(samples, y=y)
     general = isinstance(rhs, GeneralRightHandSide)
 
@@ -107,7 +108,7 @@ def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples) -> Reco
 
     cols, known = Columns(model, samples.t.size, general), None
     if isinstance(rhs, RightHandSide):  # the samples that pass all at once, the rest (if any) one by one
-        out, margin, good = rhs.evaluate_all(samples.t, y)
+        out, margin, good = rhs.evaluate_all(samples.t, y, solutions)
         if good:
             cols.fill_rows(0, {name: out[name][:good] for name in cols.names})
             known = margin[:good]

@@ -86,9 +86,14 @@ class RightHandSide(_StateDerivative):
             to_result(dict(out), where, margin_warn=0.0, margin_error=m.margin_error)
         return out
 
-    def evaluate_all(self, t: np.ndarray, y: np.ndarray) -> tuple[dict[str, np.ndarray], np.ndarray, int]:
+    def evaluate_all(
+        self, t: np.ndarray, y: np.ndarray, solutions: np.ndarray | None = None
+    ) -> tuple[dict[str, np.ndarray], np.ndarray, int]:
         """The unstabilized step at every sample ``(t_i, y_i)`` at once: the compiled step mapped over
         :data:`CHUNK` samples (``Function.map``), one call per chunk of the ``(nq + nv + nλ) × n`` matrix of states.
+
+        ``solutions`` (a compiled QP run's, :class:`~gausspp.simulation.samples.Samples`): where a sample's row
+        is finite, the QP's solution there — the step is replayed from it (build and finish, no QP solved again).
 
         Returns each output stacked along a first axis (``(n, rows, cols)``), each sample's margin
         (:func:`~gausspp.step.realizability.stacked_margins`) and how many leading samples pass the checks of
@@ -98,7 +103,11 @@ class RightHandSide(_StateDerivative):
         kernel = self.kernel
         if not isinstance(kernel, CompiledKernel) or t.size == 0:
             return {}, np.zeros(0), 0
-        out, n = _mapped(kernel, t, y, self._slices)
+        replay = None if solutions is None or kernel.qp_parts is None else np.isfinite(solutions).all(axis=1)
+        if replay is None or not replay.any():
+            out, n = _mapped(_mapped_step(kernel), t, y, self._slices)
+        else:
+            out, n = _replayed(kernel, t, y, self._slices, solutions, replay)  # type: ignore[arg-type]
         self.evaluations += n
         m = self.model
         margin = stacked_margins(out["S_norm"][:n], m.k, m.m)
@@ -112,14 +121,45 @@ class RightHandSide(_StateDerivative):
 CHUNK = 128
 
 
-def _mapped(
-    kernel: CompiledKernel, t: np.ndarray, y: np.ndarray, slices: tuple[slice, slice, slice]
+def _mapped_step(kernel: CompiledKernel) -> Bound:
+    return workspace(kernel).get(("mapped step", CHUNK), lambda: Bound(kernel.function.map(CHUNK)))
+
+
+def _replayed(
+    kernel: CompiledKernel,
+    t: np.ndarray,
+    y: np.ndarray,
+    slices: tuple[slice, slice, slice],
+    solutions: np.ndarray,
+    replay: np.ndarray,
 ) -> tuple[dict[str, np.ndarray], int]:
-    """The step's outputs at the samples, :data:`CHUNK` at a time (the last chunk padded with the last sample);
-    how many were evaluated (fewer if casadi refused a chunk: the samples from it on are left out)."""
-    mapped = workspace(kernel).get(("mapped step", CHUNK), lambda: Bound(kernel.function.map(CHUNK)))
-    fn, n = kernel.function, t.size
-    out = {name: np.empty((n, *fn.size_out(i))) for i, name in enumerate(OUTPUTS)}
+    """:func:`_mapped` with the samples where ``replay`` holds replayed from their QP ``solutions``."""
+    assert kernel.qp_parts is not None
+    parts = kernel.qp_parts
+    replayed = workspace(kernel).get(("replayed step", CHUNK), lambda: Bound(parts.replay().map(CHUNK)))
+    again = np.flatnonzero(~replay)
+    out = _mapped(replayed, t[replay], y[replay], slices, solutions[replay])[0]  # SX: never refuses
+    if again.size == 0:
+        return out, t.size
+    solved, n_solved = _mapped(_mapped_step(kernel), t[again], y[again], slices)
+    merged = {name: np.empty((t.size, *value.shape[1:])) for name, value in out.items()}
+    for name, value in merged.items():
+        value[replay], value[again] = out[name], solved[name]
+    return merged, t.size if n_solved == again.size else int(again[n_solved])
+
+
+def _mapped(
+    mapped: Bound,
+    t: np.ndarray,
+    y: np.ndarray,
+    slices: tuple[slice, slice, slice],
+    extra: np.ndarray | None = None,
+) -> tuple[dict[str, np.ndarray], int]:
+    """A mapped step's outputs at the samples, :data:`CHUNK` at a time (the last chunk padded with the last sample);
+    how many were evaluated (fewer if casadi refused a chunk: the samples from it on are left out). ``extra``: one
+    more input per sample (a row each)."""
+    n = t.size
+    out = {name: np.empty((n, rows, cols // CHUNK)) for name, (rows, cols) in zip(OUTPUTS, mapped.shapes, strict=True)}
     args, (sq, sv, sl) = mapped.args, slices  # the inputs column-major: sample after sample
     args[4][:] = 0.0
     for start in range(0, n, CHUNK):
@@ -130,6 +170,8 @@ def _mapped(
             y[rows, sv].ravel(),
             y[rows, sl].ravel(),
         )
+        if extra is not None:
+            args[5][:] = extra[rows].ravel()
         try:
             mapped.eval()
         except RuntimeError:

@@ -28,6 +28,9 @@ class Samples:
         Contact runs: the ``backend`` argument (one registry name for the decisions and the phases).
     events : tuple of dict
         Contact runs: impacts, touches and lift-offs (see :class:`~gausspp.Trajectory`).
+    qp_solutions : (N, m + k) array, optional
+        Compiled QP runs: the QP's solution ``(z, y)`` of the step at each sample, as the run solved it (NaN
+        where none was solved), for the recording to replay (:meth:`~gausspp.step.kernel.QPParts.replay`).
     """
 
     t: np.ndarray
@@ -40,3 +43,4 @@ class Samples:
     active: list[tuple[int, ...]] | None = None
     backend: str | None = None
     events: tuple[dict[str, Any], ...] = ()
+    qp_solutions: np.ndarray | None = None

@@ -183,10 +183,10 @@ def _run(
 
 def _run_compiled(rhs: AnyRightHandSide, model: Model, stab: Stabilization, opts: Options, y0: np.ndarray) -> Samples:
     o = opts
-    t, y, steps, failure, evaluations = integrate_compiled(
+    t, y, steps, failure, evaluations, solutions = integrate_compiled(
         o.method, model, o.solver, o.backend, stab, o.t0, o.t_end, o.dt, y0, o.rtol, o.atol, o.record
     )
-    return Samples(t, y, steps, evaluations, failure, o.method.name, rhs.solver)
+    return Samples(t, y, steps, evaluations, failure, o.method.name, rhs.solver, qp_solutions=solutions)
 
 
 __all__ = ["QP_TOLERANCE", "simulate"]

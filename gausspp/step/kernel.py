@@ -178,10 +178,24 @@ class QPParts:
 
     def graph(self, args: Sequence[ca.MX], only: Sequence[int] | None = None) -> list[ca.MX]:
         """The step's outputs (or those at positions ``only``) as MX, the QP a node of the graph."""
+        return self.graph_and_solution(args, only)[0]
+
+    def graph_and_solution(self, args: Sequence[ca.MX], only: Sequence[int] | None = None) -> tuple[list[ca.MX], ca.MX]:
+        """:meth:`graph`, and the QP's solution ``(z, y)`` stacked (to replay the step, :meth:`replay`)."""
         H, S, rhs, *carried = self.build(*args)
         z, y = self.backend.graph(H, S, rhs)
         finish = self.finish if only is None else only_outputs(self.finish, only)
-        return list(finish(*carried, z, y))
+        return list(finish(*carried, z, y)), ca.vertcat(z, y)
+
+    def replay(self) -> ca.Function:
+        """``(inputs, (z, y)) -> OUTPUTS``: the step's outputs from a known QP solution, no QP solved (an SX
+        function: the build and the finish only). Given the solution the QP returned for the same inputs, the
+        outputs are those of the step itself."""
+        args = self.build.sx_in()
+        _, S, rhs, *carried = self.build.call(args)
+        solution = ca.SX.sym("solution", S.shape[1] + S.shape[0])
+        z, y = solution[: S.shape[1]], solution[S.shape[1] :]
+        return ca.Function("replay", [*args, solution], self.finish.call([*carried, z, y]))
 
 
 def only_outputs(fn: ca.Function, outputs: Sequence[int]) -> ca.Function:
