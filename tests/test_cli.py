@@ -13,7 +13,8 @@ import pytest
 import gausspp as gp
 from gausspp import cli
 from gausspp.cli import console, params
-from gausspp.studies import runs
+from gausspp.studies import demo, runs
+from gausspp.studies import demo_run as demo_plan
 
 PNG = b"\x89PNG\r\n\x1a\n"
 
@@ -267,3 +268,14 @@ def test_thin_drops_near_duplicate_nodes_and_keeps_the_end() -> None:
     assert thinned.t[0] == 0.0 and thinned.t[-1] == 1.0 and np.diff(thinned.t).min() > 0.05 / 400
     assert thinned.t.size == traj.t.size - 1
     assert thinned.q.shape == (thinned.t.size, 2) and thinned.margin.size == thinned.t.size
+
+
+def test_demo_reports_each_row_as_it_finishes(demo_run) -> None:
+    """One progress line per row on stderr (`gausspp demo: k/N what (s)`), every row of the tables counted once."""
+    plan = demo_plan.plan(demo.backends(), demo_run.out)
+    lines = [line for line in demo_run.stderr.splitlines() if line.startswith("gausspp demo: ")]
+    assert len(lines) == len(plan)
+    assert sorted(int(line.split()[2].split("/")[0]) for line in lines) == list(range(1, len(plan) + 1))
+    assert all(line.split()[2].endswith(f"/{len(plan)}") and line.endswith(" s)") for line in lines)
+    for task in plan:
+        assert sum(f" {task.table} {task.name} (" in line for line in lines) == 1, task

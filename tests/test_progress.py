@@ -13,10 +13,18 @@ import gausspp as gp
 from gausspp.simulation.progress import Progress
 
 simulate_module = importlib.import_module("gausspp.simulation.inputs")  # the limits of a run
+progress_module = importlib.import_module("gausspp.simulation.progress")
+
+
+class Terminal(io.StringIO):
+    """A stream that says it is a terminal (the bar is drawn on terminals only)."""
+
+    def isatty(self) -> bool:
+        return True
 
 
 def test_progress_line_states_the_fraction_and_the_time_left() -> None:
-    stream = io.StringIO()
+    stream = Terminal()
     progress = Progress(1000, "run", enabled=True, every=0.0, stream=stream)
     progress.update(250)
     progress.close()
@@ -25,8 +33,17 @@ def test_progress_line_states_the_fraction_and_the_time_left() -> None:
 
 
 def test_a_disabled_progress_writes_nothing() -> None:
-    stream = io.StringIO()
+    stream = Terminal()
     progress = Progress(1000, "run", enabled=False, every=0.0, stream=stream)
+    progress.update(500)
+    progress.close()
+    assert stream.getvalue() == ""
+
+
+def test_no_progress_bar_off_a_terminal() -> None:
+    """A log file or a pipe gets no bar (the LongRunWarning has announced the run)."""
+    stream = io.StringIO()
+    progress = Progress(1000, "run", enabled=True, every=0.0, stream=stream)
     progress.update(500)
     progress.close()
     assert stream.getvalue() == ""
@@ -38,6 +55,7 @@ def test_a_long_fixed_step_run_reports_progress(monkeypatch: pytest.MonkeyPatch,
     monkeypatch.setattr(simulate_module, "LONG_RUN_STEPS", 10)
     monkeypatch.setattr(simulate_module, "PROGRESS_EVERY", 50)
     monkeypatch.setattr(Progress, "__init__", _every_call(Progress.__init__))
+    monkeypatch.setattr(progress_module, "is_terminal", lambda stream: True)  # stderr is captured here
     scene = gp.scenes.get("two-masses")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")

@@ -12,9 +12,11 @@ import io
 import json
 import sys
 import time
+from collections import Counter
 from collections.abc import Callable, Iterable
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import redirect_stdout
+from itertools import islice
 from pathlib import Path
 from typing import Any
 
@@ -27,10 +29,10 @@ from ..simulation import lanes, methods
 from ..simulation.trajectory import Trajectory
 from ..step import qp
 from ..studies import demo as demo_study
-from ..studies import output, runs, stability, sweeps, tables
+from ..studies import demo_run, output, runs, stability, sweeps, tables
 from ..studies import report as study
 from ..verification.verify import verify as check
-from .console import EXIT_OK, Progress, UsageError, warnings_as_lines
+from .console import EXIT_OK, Progress, RowProgress, UsageError, warnings_as_lines
 from .params import build, parse_params
 
 
@@ -42,16 +44,29 @@ def _print(lines: Iterable[str]) -> None:
 # -- demo ---------------------------------------------------------------------------------------------
 def demo(args: argparse.Namespace) -> int:
     """Two masses, rod vs servo, and the rigid-body servo: QP vs direct, table and timings; every scene;
-    the general Gauss QP's scenes; the teaching figures."""
-    _print(tables.step_lines(demo_study.step_rows(), qp.DEFAULT))
-    _print(tables.scene_lines(demo_study.scene_rows(), qp.DEFAULT))
+    the general Gauss QP's scenes; the teaching figures. The rows run on worker processes; each table
+    prints as soon as its rows are ready, with a line per finished row (and a bar) on stderr."""
     which = demo_study.backends()
-    _print(tables.general_lines(which, demo_study.general_rows(which)))
+    plan = demo_run.plan(which, Path(args.out))
+    counts = Counter(task.table for task in plan)
+    progress = RowProgress(len(plan), "gausspp demo", enabled=not getattr(args, "quiet", False))
     try:
-        written = demo_study.figures(Path(args.out))
-    except GaussppError as exc:  # matplotlib is an optional extra
-        print(f"\n(no figures: {exc})")
-        return EXIT_OK
+        results = demo_run.run(plan, demo_run.workers(), lambda task, s: progress.done(f"{task.table} {task.name}", s))
+        steps = (row for pair in islice(results, counts["step"]) for row in pair)
+        for lines in (
+            tables.step_lines(steps, qp.DEFAULT),
+            tables.scene_lines(islice(results, counts["scene"]), qp.DEFAULT),
+            tables.general_lines(which, islice(results, counts["general"])),
+        ):
+            for line in lines:
+                progress.emit(line)
+        try:
+            written = next(results)
+        except GaussppError as exc:  # matplotlib is an optional extra
+            progress.emit(f"\n(no figures: {exc})")
+            return EXIT_OK
+    finally:
+        progress.close()
     print(f"\nfigures written: {', '.join(str(p) for p in written)}")
     return EXIT_OK
 

@@ -10,6 +10,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import IO
 
+from tqdm import tqdm
+
 from ..errors import LongRunWarning
 from ..studies.tables import one_line
 
@@ -57,10 +59,7 @@ class Progress:
             self._stream.flush()
 
     def _tty(self) -> bool:
-        try:
-            return bool(self._stream.isatty())
-        except (AttributeError, ValueError):
-            return False
+        return is_terminal(self._stream)
 
     def _loop(self) -> None:
         if self._done.wait(self.delay):
@@ -78,6 +77,48 @@ class Progress:
                 self.shown = True
                 marks = marks[1:] or [marks[0] + 60.0]
             self._done.wait(0.2)
+
+
+def is_terminal(stream: IO[str]) -> bool:
+    """Whether ``stream`` is a terminal (a bar is drawn there only)."""
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
+
+
+class RowProgress:
+    """Rows of a study as they finish: a line each on stderr, and a bar with the time left (tqdm) on a terminal.
+
+    ``enabled=False`` (``--quiet``): neither. :meth:`emit` prints a line of the study's own output
+    on stdout around the bar.
+    """
+
+    def __init__(self, total: int, label: str, enabled: bool = True) -> None:
+        self.total, self.label, self.enabled, self.count = total, label, enabled, 0
+        self.bar = tqdm(
+            total=total,
+            desc=label,
+            unit="row",
+            file=sys.stderr,
+            leave=False,
+            disable=not (enabled and is_terminal(sys.stderr)),
+            bar_format="{desc}: {n}/{total} rows |{bar}| {elapsed} elapsed, about {remaining} left",
+        )
+
+    def done(self, what: str, seconds: float) -> None:
+        """One more row finished: ``what`` it was and how long it took."""
+        self.count += 1
+        if self.enabled:
+            self.bar.write(f"{self.label}: {self.count}/{self.total} {what} ({seconds:.1f} s)", file=sys.stderr)
+        self.bar.update(1)
+
+    def emit(self, line: str) -> None:
+        """Print ``line`` on stdout (the bar, if any, is redrawn below it)."""
+        self.bar.write(line, file=sys.stdout)
+
+    def close(self) -> None:
+        self.bar.close()
 
 
 @contextmanager

@@ -160,7 +160,7 @@ def check_step_count(
         shown = bool(among) and among[0].progress
         warnings.warn(
             f"{what} (method {meth.name!r}): this run will take long"
-            + (" (its progress and the time left are shown on standard error)" if shown else "")
+            + (" (on a terminal, its progress and the time left are shown on standard error)" if shown else "")
             + "; enlarge dt or shorten t_end"
             + (", or use an adaptive or compiled method (DOP853, rk4-compiled)" if shown else ""),
             LongRunWarning,

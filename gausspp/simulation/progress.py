@@ -1,56 +1,57 @@
-"""Progress of a long run on standard error: how far it is, and how long it still needs.
+"""Progress of a long run on standard error: how far it is, and how long it still needs (a tqdm bar).
 
 A run of more than :data:`gausspp.simulate.LONG_RUN_STEPS` fixed steps is announced up front
-(:class:`~gausspp.LongRunWarning`); while the Python lane steps it, a line like
-``gausspp.simulate: 37% (3.7e+06 of 1e+07 steps), about 52 s left`` is rewritten in place every
-few seconds, and cleared at the end.
+(:class:`~gausspp.LongRunWarning`); while the Python lane steps it, a bar like
+``gausspp.simulate (rk4): 37% (3700000 of 1e+07 steps), about 00:52 left |███▋      |`` is redrawn in
+place every few seconds on a terminal, and cleared at the end. Not on a terminal (a log, a pipe), or
+with ``enabled=False``, nothing is drawn.
 """
 
 from __future__ import annotations
 
 import sys
-import time
 from typing import TextIO
+
+from tqdm import tqdm
+
+#: The bar's text: the fraction done, the steps, the time left, then the bar.
+FORMAT = "{desc}: {percentage:.0f}% ({n:.3g} of {total:.3g} steps), about {remaining} left |{bar}|"
+
+
+def is_terminal(stream: TextIO) -> bool:
+    """Whether ``stream`` is a terminal (the bar is drawn there only)."""
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):
+        return False
 
 
 class Progress:
-    """Report ``done`` out of ``total`` steps at most every ``every`` seconds (``enabled=False``: silent).
+    """Report ``done`` out of ``total`` steps at most every ``every`` seconds, on ``stream`` (standard error) when
+    it is a terminal; ``enabled=False``: silent.
 
     :meth:`update` costs one clock read; call it every few hundred steps.
     """
 
     def __init__(self, total: int, label: str, *, enabled: bool, every: float = 2.0, stream: TextIO | None = None):
-        self.total, self.label, self.enabled, self.every = total, label, enabled, every
         self.stream = stream if stream is not None else sys.stderr
-        self.start = self.last = time.perf_counter()
-        self.shown = False
+        self.enabled = enabled and is_terminal(self.stream)
+        self.bar = tqdm(
+            total=total,
+            desc=label,
+            file=self.stream,
+            mininterval=every,
+            miniters=1,
+            disable=not self.enabled,
+            bar_format=FORMAT,
+            leave=True,
+        )
 
     def update(self, done: int) -> None:
-        if not self.enabled:
-            return
-        now = time.perf_counter()
-        if now - self.last < self.every or done <= 0:
-            return
-        self.last = now
-        left = (now - self.start) / done * (self.total - done)
-        self.stream.write(
-            f"\r{self.label}: {100 * done / self.total:.0f}% ({done:.3g} of {self.total:.3g} steps), "
-            f"about {_duration(left)} left "
-        )
-        self.stream.flush()
-        self.shown = True
+        """``done`` steps of ``total`` are taken."""
+        if self.enabled and done > self.bar.n:
+            self.bar.update(done - self.bar.n)
 
     def close(self) -> None:
-        """End the progress line (a newline, so that what follows starts clean)."""
-        if self.shown:
-            self.stream.write("\n")
-            self.stream.flush()
-            self.shown = False
-
-
-def _duration(seconds: float) -> str:
-    if seconds < 120:
-        return f"{seconds:.0f} s"
-    if seconds < 7200:
-        return f"{seconds / 60:.0f} min"
-    return f"{seconds / 3600:.1f} h"
+        """End the bar (a newline, so that what follows starts clean)."""
+        self.bar.close()

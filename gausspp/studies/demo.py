@@ -36,6 +36,14 @@ STEP_CASES: tuple[tuple[str, dict[str, Any]], ...] = (
 #: Steps of compiled RK4 per scene in the demo (stiff or fast scenes need more).
 STEPS = {"stiff-chain": 20_000, "andrews": 6_000}
 
+#: The general-QP rows' horizon where the scene's own (≤ 3 s) costs too much for the demo (each right-hand
+#: side is a Gauss QP solved from Python): the four-bar's redundant rows are there from the start; the crane
+#: runs with the weaker motor of :data:`GENERAL_PARAMS`, which saturates before t = 1.
+GENERAL_T_END = {"saturated-crane": 1.0, "four-bar-redundant": 0.25}
+
+#: Scene parameters of the general-QP rows: a crane motor of 8 N (12 by default) saturates within the first second.
+GENERAL_PARAMS: dict[str, dict[str, Any]] = {"saturated-crane": {"F_max": 8.0}}
+
 
 @dataclass(frozen=True)
 class StepRow:
@@ -113,27 +121,36 @@ def _step_label(scene: scenes.Scene, params: dict[str, Any]) -> str:
     )
 
 
-def step_rows() -> Iterator[StepRow]:
-    """Each case of :data:`STEP_CASES` by the direct formula and by the Gauss QP (raw answers), against the
+def step_pair(case: int) -> tuple[StepRow, StepRow]:
+    """Case ``case`` of :data:`STEP_CASES` by the direct formula and by the Gauss QP (raw answers), against the
     independent acceleration-space QP (:func:`gausspp.crosscheck`), with the compiled time per step."""
-    for name, params in STEP_CASES:
-        scene = scenes.get(name, **params)
-        model = scene.model
-        lam = scene.lam0 if scene.lam0 is not None else np.zeros(0)
-        direct = model.step(0.0, scene.q0, scene.v0, solver="direct", refine=False)
-        gauss = model.step(0.0, scene.q0, scene.v0, solver="qp", refine=False)
-        check = crosscheck(model, 0.0, scene.q0, scene.v0, scene.lam0)
-        for res, solver in ((direct, "direct"), (gauss, "qp")):
-            yield StepRow(
-                scene=name,
-                label=_step_label(scene, params),
-                solver=solver,
-                acceleration=res.a,
-                multiplier=float(res.u[0]),
-                gap=None if solver == "direct" else gauss.disagreement(direct),
-                versus_reference=check.distances["direct" if solver == "direct" else "qp:default"],
-                us_per_step=time_per_step(model, 0.0, scene.q0, scene.v0, lam, solver),
-            )
+    name, params = STEP_CASES[case]
+    scene = scenes.get(name, **params)
+    model = scene.model
+    lam = scene.lam0 if scene.lam0 is not None else np.zeros(0)
+    direct = model.step(0.0, scene.q0, scene.v0, solver="direct", refine=False)
+    gauss = model.step(0.0, scene.q0, scene.v0, solver="qp", refine=False)
+    check = crosscheck(model, 0.0, scene.q0, scene.v0, scene.lam0)
+    rows = [
+        StepRow(
+            scene=name,
+            label=_step_label(scene, params),
+            solver=solver,
+            acceleration=res.a,
+            multiplier=float(res.u[0]),
+            gap=None if solver == "direct" else gauss.disagreement(direct),
+            versus_reference=check.distances["direct" if solver == "direct" else "qp:default"],
+            us_per_step=time_per_step(model, 0.0, scene.q0, scene.v0, lam, solver),
+        )
+        for res, solver in ((direct, "direct"), (gauss, "qp"))
+    ]
+    return rows[0], rows[1]
+
+
+def step_rows() -> Iterator[StepRow]:
+    """Every case of :data:`STEP_CASES` (:func:`step_pair`), direct row then QP row."""
+    for case in range(len(STEP_CASES)):
+        yield from step_pair(case)
 
 
 def _largest_energy_balance(traj: Trajectory) -> float | None:
@@ -142,32 +159,37 @@ def _largest_energy_balance(traj: Trajectory) -> float | None:
     return float(np.nanmax(balance)) if np.isfinite(balance).any() else None
 
 
-def scene_rows() -> Iterator[SceneRow]:
-    """Every scene with the direct formula, by compiled RK4 with the direct step and with the QP (T ≤ 2),
+def scene_row(name: str) -> SceneRow:
+    """Scene ``name`` with the direct formula, by compiled RK4 with the direct step and with the QP (T ≤ 2),
     the largest relative state difference along the run, and the direct run verified by (23)."""
+    scene = scenes.get(name)
+    T = min(scene.t_end, 2.0)
+    steps = STEPS.get(name, 2000)
+    kwargs: dict[str, Any] = dict(lam0=scene.lam0, method="rk4-compiled", dt=T / steps, record=max(steps // 400, 1))
+    start = time.perf_counter()
+    direct = simulate(scene.model, scene.q0, scene.v0, T, solver="direct", **kwargs)
+    run_ms = (time.perf_counter() - start) * 1e3
+    gauss = simulate(scene.model, scene.q0, scene.v0, T, solver="qp", **kwargs)
+    scale = max(1.0, float(np.abs(np.hstack([direct.q, direct.v])).max()))
+    check = verify(scene.model, direct)
+    return SceneRow(
+        scene=name,
+        realizations=", ".join(dict.fromkeys(c.realization.label for c in scene.model.constraints)),
+        t_end=T,
+        steps=direct.steps,
+        gap=float(np.abs(np.hstack([gauss.q - direct.q, gauss.v - direct.v])).max()) / scale,
+        residual=direct.max_residual(),
+        energy_balance=_largest_energy_balance(direct),
+        relative_gap=check.relative_gap,
+        is_motion=check.is_motion,
+        run_ms=run_ms,
+    )
+
+
+def scene_rows() -> Iterator[SceneRow]:
+    """Every scene with the direct formula (:func:`scene_row`)."""
     for name in scenes.names("equality"):
-        scene = scenes.get(name)
-        T = min(scene.t_end, 2.0)
-        steps = STEPS.get(name, 2000)
-        kwargs: dict[str, Any] = dict(lam0=scene.lam0, method="rk4-compiled", dt=T / steps, record=max(steps // 400, 1))
-        start = time.perf_counter()
-        direct = simulate(scene.model, scene.q0, scene.v0, T, solver="direct", **kwargs)
-        run_ms = (time.perf_counter() - start) * 1e3
-        gauss = simulate(scene.model, scene.q0, scene.v0, T, solver="qp", **kwargs)
-        scale = max(1.0, float(np.abs(np.hstack([direct.q, direct.v])).max()))
-        check = verify(scene.model, direct)
-        yield SceneRow(
-            scene=name,
-            realizations=", ".join(dict.fromkeys(c.realization.label for c in scene.model.constraints)),
-            t_end=T,
-            steps=direct.steps,
-            gap=float(np.abs(np.hstack([gauss.q - direct.q, gauss.v - direct.v])).max()) / scale,
-            residual=direct.max_residual(),
-            energy_balance=_largest_energy_balance(direct),
-            relative_gap=check.relative_gap,
-            is_motion=check.is_motion,
-            run_ms=run_ms,
-        )
+        yield scene_row(name)
 
 
 def backends() -> Backends:
@@ -194,41 +216,47 @@ def _on_grid_gap(run: Trajectory, other: Trajectory, grid: np.ndarray) -> float:
     return float(np.abs(run.q[on_grid[0]] - other.q[on_grid[1]]).max())
 
 
+def general_row(name: str, which: Backends) -> GeneralRow:
+    """Scene ``name`` (without a closed-form step) by DOP853 (rtol 1e-11) with the general Gauss QP on
+    ``which.first`` (and ``which.second`` for the gap between the two), recorded at 201 times, to
+    ``T = min(t_end, GENERAL_T_END)`` (:data:`GENERAL_T_END`)."""
+    scene = scenes.get(name, **GENERAL_PARAMS.get(name, {}))
+    model = scene.model
+    T = min(scene.t_end, GENERAL_T_END.get(name, 3.0))
+    grid = np.linspace(0.0, T, 201)
+    kwargs: dict[str, Any] = dict(lam0=scene.lam0, method="DOP853", rtol=1e-11, atol=1e-13, record=grid)
+    if "stabilize" in scene.params:
+        kwargs["stabilize"] = scene.params["stabilize"]
+    elif model.bounded:
+        kwargs["stabilize"] = "baumgarte"
+    start = time.perf_counter()
+    run = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{which.first}", **kwargs)
+    run_ms = (time.perf_counter() - start) * 1e3
+    gap = None
+    if which.second:
+        other = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{which.second}", **kwargs)
+        gap = _on_grid_gap(run, other, grid)
+    exact = None
+    if scene.exact is not None:
+        exact = max(float(np.abs(scene.exact(t)[0] - q).max()) for t, q in zip(run.t, run.q, strict=True))
+    return GeneralRow(
+        scene=name,
+        what=_features(model, run),
+        t_end=T,
+        events=len(run.events),
+        saturated=float(run.saturated.any(axis=1).mean()) if model.bounded else None,
+        backend_gap=gap,
+        residual=run.max_residual(),
+        energy_balance=_largest_energy_balance(run),
+        exact_error=exact,
+        run_ms=run_ms,
+    )
+
+
 def general_rows(which: Backends) -> Iterator[GeneralRow]:
-    """Every scene without a closed-form step, by DOP853 (rtol 1e-11) with the general Gauss QP on
-    ``which.first`` (and ``which.second`` for the gap between the two), recorded at 201 times (T ≤ 3)."""
+    """Every scene without a closed-form step (:func:`general_row`)."""
     for name in scenes.names("general"):
-        scene = scenes.get(name)
-        model = scene.model
-        T = min(scene.t_end, 3.0)
-        grid = np.linspace(0.0, T, 201)
-        kwargs: dict[str, Any] = dict(lam0=scene.lam0, method="DOP853", rtol=1e-11, atol=1e-13, record=grid)
-        if "stabilize" in scene.params:
-            kwargs["stabilize"] = scene.params["stabilize"]
-        elif model.bounded:
-            kwargs["stabilize"] = "baumgarte"
-        start = time.perf_counter()
-        run = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{which.first}", **kwargs)
-        run_ms = (time.perf_counter() - start) * 1e3
-        gap = None
-        if which.second:
-            other = simulate(model, scene.q0, scene.v0, T, backend=f"qpsolvers:{which.second}", **kwargs)
-            gap = _on_grid_gap(run, other, grid)
-        exact = None
-        if scene.exact is not None:
-            exact = max(float(np.abs(scene.exact(t)[0] - q).max()) for t, q in zip(run.t, run.q, strict=True))
-        yield GeneralRow(
-            scene=name,
-            what=_features(model, run),
-            t_end=T,
-            events=len(run.events),
-            saturated=float(run.saturated.any(axis=1).mean()) if model.bounded else None,
-            backend_gap=gap,
-            residual=run.max_residual(),
-            energy_balance=_largest_energy_balance(run),
-            exact_error=exact,
-            run_ms=run_ms,
-        )
+        yield general_row(name, which)
 
 
 def figures(out: Path) -> list[Path]:
