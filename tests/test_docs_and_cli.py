@@ -77,7 +77,8 @@ def test_demo_says_which_qp_backends_it_compared(
     out = capsys.readouterr().out
     row = next(line for line in out.splitlines() if line.startswith("two-actuator-servo")).split()
     if first == "daqp":
-        assert "(daqp, compared with osqp)" in out and "daqp vs osqp" in out
+        assert which.second in ("proxqp", "osqp")
+        assert f"(daqp, compared with {which.second})" in out and f"daqp vs {which.second}" in out
         assert float(row[-5]) < 1e-8  # the two backends agree along the run
     else:
         assert "osqp vs osqp" not in out and "daqp not installed — `pip install daqp`" in out

@@ -56,12 +56,12 @@ def demo(args: argparse.Namespace) -> int:
         for lines in (
             tables.step_lines(steps, qp.DEFAULT),
             tables.scene_lines(islice(results, counts["scene"]), qp.DEFAULT),
-            tables.general_lines(which, islice(results, counts["general"])),
+            tables.general_lines(which, demo_run.general_rows(which, islice(results, counts["general"]))),
         ):
             for line in lines:
                 progress.emit(line)
         try:
-            written = next(results)
+            written = list(islice(results, counts["figures"]))
         except GaussppError as exc:  # matplotlib is an optional extra
             progress.emit(f"\n(no figures: {exc})")
             return EXIT_OK

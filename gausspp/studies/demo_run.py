@@ -39,10 +39,20 @@ def plan(which: demo.Backends, out: Path) -> list[Task]:
     ]
     equality = [Task("scene", name, demo.scene_row, (name,)) for name in scenes.names("equality")]
     general = [
-        Task("general", name, demo.general_row, (name, which), heavy=name in demo.GENERAL_T_END)
+        Task("general", f"{name} ({backend})", demo.general_run, (name, backend), heavy=name in demo.GENERAL_T_END)
         for name in scenes.names("general")
+        for backend in (which.first, which.second)
+        if backend
     ]
-    return [*steps, *equality, *general, Task("figures", str(out), demo.figures, (out,), heavy=True)]
+    figures = [Task("figures", name, demo.figure, (out, name), heavy=True) for name in demo.FIGURES]
+    return [*steps, *equality, *general, *figures]
+
+
+def general_rows(which: demo.Backends, runs: Iterator[Any]) -> Iterator[demo.GeneralRow]:
+    """The general-QP table's rows from the runs of :func:`plan`'s general tasks, taken in their order."""
+    for name in scenes.names("general"):
+        first = next(runs)
+        yield demo.general_row(name, first, next(runs) if which.second else None)
 
 
 def timed(call: Callable[..., Any], args: tuple[Any, ...]) -> tuple[Any, float]:
