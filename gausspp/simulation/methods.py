@@ -1,6 +1,7 @@
-"""Integration methods: a registry of names with their declared order and lane.
+"""Integration methods: a registry of names with their declared order.
 
-Three lanes run the same right-hand side (the step of docs/theory.md §2–3 plus kinematics):
+Which lane runs a method is decided by :mod:`gausspp.simulation.lanes` (the one table of lanes); the lanes
+run the same right-hand side (the step of docs/theory.md §2–3 plus kinematics):
 
 * ``python`` — fixed-step schemes stepped from Python, one compiled step call per stage;
 * ``scipy`` — scipy's adaptive and stiff ``OdeSolver`` classes (RK45, DOP853, Radau, BDF), the
@@ -50,7 +51,6 @@ class Method:
         Variable-order BDF codes (scipy's BDF, CVODES) do not raise their order when the step is
         imposed, so they declare 1; with their own step control they behave as tolerance-
         proportional methods.
-    lane : {"python", "scipy", "compiled"}
     adaptive : bool
         True if the step size is chosen by an error estimate (``rtol``, ``atol``).
     description : str
@@ -60,7 +60,6 @@ class Method:
 
     name: str
     order: int
-    lane: str
     adaptive: bool
     description: str
     tableau: Tableau | None = None
@@ -69,23 +68,21 @@ class Method:
 METHODS: dict[str, Method] = {
     m.name: m
     for m in (
-        Method("rk4", 4, "python", False, "classical Runge–Kutta, fixed step", RK4),
+        Method("rk4", 4, False, "classical Runge–Kutta, fixed step", RK4),
         Method(
             "symplectic-euler",
             1,
-            "python",
             False,
             "semi-implicit Euler: v first, then q with the new v; symplectic for ideal holonomic systems",
         ),
-        Method("RK45", 5, "scipy", True, "scipy Dormand–Prince 5(4), adaptive"),
-        Method("DOP853", 8, "scipy", True, "scipy Dormand–Prince 8(5,3), adaptive"),
-        Method("Radau", 5, "scipy", True, "scipy Radau IIA, implicit, stiff"),
-        Method("BDF", 1, "scipy", True, "scipy variable-order BDF, stiff; stays at order 1 when the step is imposed"),
-        Method("rk4-compiled", 4, "compiled", False, "RK4 with the whole run in one casadi mapaccum call", RK4),
+        Method("RK45", 5, True, "scipy Dormand–Prince 5(4), adaptive"),
+        Method("DOP853", 8, True, "scipy Dormand–Prince 8(5,3), adaptive"),
+        Method("Radau", 5, True, "scipy Radau IIA, implicit, stiff"),
+        Method("BDF", 1, True, "scipy variable-order BDF, stiff; stays at order 1 when the step is imposed"),
+        Method("rk4-compiled", 4, False, "RK4 with the whole run in one casadi mapaccum call", RK4),
         Method(
             "cvodes",
             1,
-            "compiled",
             True,
             "SUNDIALS CVODES variable-order BDF via casadi (direct path); stays at order 1 when the step is imposed",
         ),

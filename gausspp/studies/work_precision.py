@@ -104,7 +104,7 @@ def settings(method: _methods.Method, T: float, samples: int, quick: bool) -> li
         return [(f"rtol={r:g}", {"rtol": r, "atol": r * 1e-2}) for r in tols]
     base = T / (samples - 1)  # dt divides the sampling interval, so the samples lie on the grid
     factors = [4, 32, 256] if quick else [1, 4, 16, 64, 256, 1024]
-    if method.lane == "python":
+    if lanes.lane_of(method, lanes.KINDS[lanes.SMOOTH]).name == "python":
         factors = factors[:2]  # one Python call per stage: the fine end belongs to the compiled lane
     return [(f"dt=T/{(samples - 1) * f}", {"dt": base / f}) for f in factors]
 
