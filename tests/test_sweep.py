@@ -310,16 +310,16 @@ def test_cli_sweep_work_precision_writes_the_report_and_resumes(
     argv += ["direct", "--repeats", "1", "--workers", "1", "--out", str(tmp_path), "--quiet"]
     assert main(argv) == 0
     text = capsys.readouterr().out
-    assert "6 runs; computed 7 of 7 tasks" in text and "two-masses" in text and "rtol=1e-13" in text
+    assert "7 runs; computed 8 of 8 tasks" in text  # rk4 (compiled lane): 3 dt; DOP853: 4 rtol and "two-masses" in text and "rtol=1e-13" in text
     for name in ("work_precision.jsonl", "work_precision.csv", "work_precision.json"):
         assert (tmp_path / name).stat().st_size > 0
     records = json.loads((tmp_path / "work_precision.json").read_text())
-    assert [r["method"] for r in records] == ["rk4"] * 2 + ["DOP853"] * 4 and all(
+    assert [r["method"] for r in records] == ["rk4"] * 3 + ["DOP853"] * 4 and all(
         r["status"] == "success" for r in records
     )
-    assert len(_records(tmp_path / "work_precision.jsonl")) == 7
+    assert len(_records(tmp_path / "work_precision.jsonl")) == 8
     assert main(argv) == 0  # resumed: nothing computed again, the same table
-    assert "computed 0 of 7 tasks" in capsys.readouterr().out
+    assert "computed 0 of 8 tasks" in capsys.readouterr().out
     assert json.loads((tmp_path / "work_precision.json").read_text()) == records
     assert main(["sweep", "work-precision", "--resolution", "3"]) == 2
     assert main(["sweep", "realizability", "--scenes", "pendulum"]) == 2
