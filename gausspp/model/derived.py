@@ -27,6 +27,7 @@ def _like(model: Model, constraints: list[Any]) -> Model:
         margin_warn=model.margin_warn,
         margin_error=model.margin_error,
         refine=model.refine,
+        route=model.route_requested,
         _allow_free=True,
     )
 

@@ -25,6 +25,7 @@ from ..step.kernel import Kernel
 from ..step.problem import StepProblem
 from ..step.qp import QPBackend
 from ..step.results import ImpactResult, StepResult
+from ..step.sparse import choose_route
 from ..validation import positive
 from .assembly import assemble, assemble_contacts
 from .constraints import Constraint, Unilateral
@@ -52,6 +53,11 @@ class Model:
         (``a = a₀ + A⁻¹Du`` cancels there); ``False`` shows each solver's raw answer.
     contact_tol : float
         A contact whose gap is within this of zero is closed.
+    route : {"auto", "dense", "sparse"}
+        How the compiled step eliminates the acceleration (:mod:`gausspp.step.sparse`): ``"dense"`` in whitened
+        reaction space (robust to a badly conditioned ``A``; O(k³) graph), ``"sparse"`` in the mechanism's
+        own sparsity (linear in the number of bodies for chains and trees); ``"auto"`` picks by size and
+        sparsity (:func:`gausspp.step.sparse.choose_route`). The chosen one is ``model.route``.
 
     Attributes
     ----------
@@ -80,6 +86,7 @@ class Model:
         margin_error: float = 1e-12,
         refine: bool = True,
         contact_tol: float = 1e-9,
+        route: str = "auto",
         _allow_free: bool = False,
     ) -> None:
         if not isinstance(mechanism, Mechanism):
@@ -105,6 +112,9 @@ class Model:
         self.contact_tol = float(contact_tol)
         a = assemble(mechanism, self.constraints, self.names)
         self.expressions, self.inputs, self.k, self.m, self.n_lam = a.expressions, a.inputs, a.k, a.m, a.n_lam
+        #: the route asked for ("auto", "dense" or "sparse") and the one taken ("dense" or "sparse")
+        self.route_requested = route
+        self.route = choose_route(a.expressions, route)
         self.row_names, self.lam_columns, self.groups, self.group_bounds = (
             a.row_names,
             a.lam_columns,

@@ -118,23 +118,26 @@ def simulate(
         lane,
     )
     if model.contacts:
-        return _labelled("events", lambda: run_contacts(model, q0, v0, lam0, stabilize, opts))
+        return _labelled("events", model.route, lambda: run_contacts(model, q0, v0, lam0, stabilize, opts))
     stab = as_stabilization(stabilize, opts.dt)
     y0, redundant, chosen = _start(model, q0, v0, lam0, stab, opts)
     rhs = _right_hand_side(model, opts, stab, redundant)
     samples = _run(chosen, rhs, model, stab, opts, y0, redundant)
     return _labelled(
-        chosen.name, lambda: recording.finish(recording.record_smooth(model, rhs, samples), samples.failure, opts.throw)
+        chosen.name,
+        model.route,
+        lambda: recording.finish(recording.record_smooth(model, rhs, samples), samples.failure, opts.throw),
     )
 
 
-def _labelled(lane: str, run: Callable[[], Trajectory]) -> Trajectory:
-    """The trajectory ``run`` returns, or carries on the error it raises, with ``lane`` (the lane that ran it)."""
+def _labelled(lane: str, route: str, run: Callable[[], Trajectory]) -> Trajectory:
+    """The trajectory ``run`` returns, or carries on the error it raises, with ``lane`` (the lane that ran it)
+    and ``route`` (the step's, :mod:`gausspp.step.sparse`)."""
     try:
-        return replace(run(), lane=lane)
+        return replace(run(), lane=lane, route=route)
     except GaussppError as exc:
         if isinstance(getattr(exc, "trajectory", None), Trajectory):
-            exc.trajectory = replace(exc.trajectory, lane=lane)  # type: ignore[attr-defined]
+            exc.trajectory = replace(exc.trajectory, lane=lane, route=route)  # type: ignore[attr-defined]
         raise
 
 

@@ -46,6 +46,9 @@ class Trajectory:
         The lane that ran the method (:mod:`gausspp.simulation.lanes`): ``"compiled"`` (the whole run as
         one casadi graph), ``"python"`` (fixed steps from Python), ``"scipy"``, ``"cvodes"`` or
         ``"events"`` (contact phases); ``""`` for a trajectory not made by :func:`gausspp.simulate`.
+    route : str
+        How each step eliminated the acceleration: ``"dense"`` or ``"sparse"`` (the model's ``route``,
+        :mod:`gausspp.step.sparse`); ``""`` for a trajectory not made by :func:`gausspp.simulate`.
     steps, rhs_evaluations : int
     contact_force : (N, n_contact_rows) array
         Multipliers of unilateral contacts (≥ 0; empty second axis without contacts).
@@ -90,6 +93,7 @@ class Trajectory:
     events: tuple[dict[str, Any], ...] = ()
     gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     lane: str = ""
+    route: str = ""
 
     @property
     def success(self) -> bool:

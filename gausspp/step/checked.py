@@ -49,9 +49,13 @@ def kernel_for(model: StepModel, solver: str, backend: str | qp.QPBackend | None
     chosen = qp.get(backend) if solver == "qp" else None
     key = ("kernel", solver, chosen.name if chosen else None, refine)
     ws = workspace(model)
-    kernel = ws.get(key, lambda: build_kernel("step", model.inputs, model.expressions, solver, chosen, refine))
+
+    def build() -> Kernel:
+        return build_kernel("step", model.inputs, model.expressions, solver, chosen, refine, model.route)
+
+    kernel = ws.get(key, build)
     if chosen is not None and getattr(kernel, "backend", chosen) is not chosen:  # a backend object given anew
-        kernel = ws.put(key, build_kernel("step", model.inputs, model.expressions, solver, chosen, refine))
+        kernel = ws.put(key, build())
     return kernel
 
 

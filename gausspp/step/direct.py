@@ -19,10 +19,14 @@ def direct_reaction(red: Reduced) -> ca.SX:
     ``Ŝ`` is ``S`` with the scales of ``J`` and ``D`` in the kinetic metric divided out; its
     condition number is ``1/margin``, whereas ``S`` inherits the condition number of ``A``.
     """
-    k, m = red.S_hat.shape
+    require_square(*red.S_hat.shape)
+    return ca.solve(red.S_hat, red.rhs_hat)
+
+
+def require_square(k: int, m: int) -> None:
+    """The direct solution needs ``S`` square: as many reaction directions ``m`` as constraint rows ``k``."""
     if k != m:
         raise InputError(
             f"solver='direct' needs as many reaction directions as constraint components, got {m} for {k}; "
             "use solver='qp', which finds the least-compulsion reaction"
         )
-    return ca.solve(red.S_hat, red.rhs_hat)

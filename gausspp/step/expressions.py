@@ -186,21 +186,24 @@ def outputs(p: StepExpressions, red: Reduced, z: ca.SX, y: ca.SX | None, refine:
             ca.mmax(ca.fabs(red.rhs_hat)) + size_S * size_z + tiny
         )
         dual = ca.mmax(ca.fabs(z_solver + red.S_hat.T @ y)) / (size_z + size_S * ca.mmax(ca.fabs(y)) + tiny)
+    return step_outputs(p, a, u, ca.sumsqr(z), red.S_norm, red.pivot, red.a_free, primal, dual)
+
+
+def step_outputs(
+    p: StepExpressions,
+    a: ca.SX,
+    u: ca.SX,
+    compulsion: ca.SX,
+    S_norm: ca.SX,
+    pivot: ca.SX,
+    a_free: ca.SX,
+    primal: ca.SX,
+    dual: ca.SX,
+) -> list[ca.SX]:
+    """The outputs :data:`OUTPUTS` of a step solved by either route (dense or :mod:`~gausspp.step.sparse`)."""
     R = p.r0 + p.D @ u
     vel = p.v if p.v is not None else ca.SX.zeros(R.numel())
-    values = [
-        a,
-        u,
-        R,
-        ca.sumsqr(z),
-        red.S_norm,
-        p.J @ a - p.phi,
-        p.Phi,
-        red.pivot,
-        red.a_free,
-        primal,
-        dual,
-    ]
+    values = [a, u, R, compulsion, S_norm, p.J @ a - p.phi, p.Phi, pivot, a_free, primal, dual]
     values += [
         p.qdot if p.qdot is not None else ca.SX(0, 1),
         p.energy if p.energy is not None else ca.SX(0),

@@ -1,8 +1,4 @@
-"""Compiled per-step evaluators: one casadi call per step through ``Function.buffer()``.
-
-A plain casadi call from Python costs ≈15–25 µs of argument handling; a buffer-bound call
-costs ≈0.15 µs. A kernel binds numpy arrays to a compiled function's inputs and outputs once,
-so a step is: copy the inputs in, one C call, read the outputs.
+"""Compiled per-step evaluators: one casadi call per step through ``Function.buffer()`` (:mod:`.bound`).
 
 Two kinds, one interface (``kernel(*inputs) -> {name: array}``, or ``kernel.evaluate()``
 on inputs written into ``kernel.inputs`` in place):
@@ -12,56 +8,27 @@ on inputs written into ``kernel.inputs`` in place):
 * :class:`PythonQPKernel` — the QP is solved from Python (qpsolvers route): one call builds
   the QP, the backend solves it, a second call finishes the step.
 
-:func:`build_kernel` makes either from a step's expressions.
+:func:`build_kernel` makes either from a step's expressions, by the dense route (whitened reaction space,
+:mod:`gausspp.step.expressions`) or the sparse one (the mechanism's sparsity, :mod:`gausspp.step.sparse`).
 """
 
 from __future__ import annotations
 
-import dataclasses
-from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any
 
 import casadi as ca
 import numpy as np
 
-from .direct import direct_reaction
+from . import sparse
+from .bound import Bound, dense_outputs, load_inputs, only_outputs
+from .direct import direct_reaction, require_square
 from .expressions import OUTPUTS, StepExpressions, outputs, reduce, well_conditioned_constant
 from .qp import QPBackend
 from .qp.casadi_conic import stdout_silenced
+from .qp_parts import QPParts, guarded, qp_parts
 
-T = TypeVar("T")
-
-
-class Bound:
-    """A casadi Function with numpy arrays bound to every input and output."""
-
-    def __init__(self, fn: ca.Function) -> None:
-        self.fn = fn
-        self.args = [np.zeros(fn.nnz_in(i)) for i in range(fn.n_in())]
-        self.res = [np.zeros(fn.nnz_out(i)) for i in range(fn.n_out())]
-        self._buf, self.eval = fn.buffer()
-        for i, arr in enumerate(self.args):
-            self._buf.set_arg(i, memoryview(arr))  # type: ignore[call-arg, arg-type]  # casadi's stubs
-        for i, arr in enumerate(self.res):
-            self._buf.set_res(i, memoryview(arr))  # type: ignore[call-arg, arg-type]
-        #: each output's (rows, cols)
-        self.shapes = [fn.size_out(i) for i in range(fn.n_out())]
-        # matrix-shaped views of the dense output buffers, made once (casadi stores column-major);
-        # a sparse output stays its nonzeros
-        self.outputs = [
-            r.reshape(fn.size_out(i), order="F") if fn.size_out(i)[1] > 1 and fn.sparsity_out(i).is_dense() else r
-            for i, r in enumerate(self.res)
-        ]
-
-    def output(self, i: int) -> np.ndarray:
-        """Output ``i`` in its matrix shape (a view into the bound buffer)."""
-        return self.outputs[i]
-
-
-def load_inputs(targets: Sequence[np.ndarray], values: Sequence[Any]) -> None:
-    for target, value in zip(targets, values, strict=True):
-        target[:] = np.ravel(value, order="F")
+__all__ = ["Bound", "CompiledKernel", "Kernel", "PythonQPKernel", "build_kernel", "dense_outputs", "load_inputs"]
+__all__ += ["only_outputs"]
 
 
 class CompiledKernel:
@@ -130,127 +97,34 @@ class PythonQPKernel:
 Kernel = CompiledKernel | PythonQPKernel
 
 
-def dense_outputs(exprs: list[ca.SX]) -> list[ca.SX]:
-    """Outputs with every entry stored: buffers are sized by stored entries, and a structural
-    zero (say, a residual casadi proves to vanish) must still come out as a number."""
-    return ca.cse([ca.densify(e) for e in exprs])  # and each common subexpression computed once
-
-
-def _guard(build: ca.Function) -> ca.Function:
-    """QP data with NaN/inf replaced by zeros: a plugin must never see them (casadi aborts the whole
-    call). The step's own outputs still carry the NaN, which the checks then diagnose."""
-    args = build.sx_in()
-    H, S, rhs, *carried = build.call(args)
-    total = ca.sum1(ca.vec(S)) + ca.sum1(rhs)
-    finite = ca.fabs(total) < ca.inf  # false for NaN and ±inf
-    guarded = [H, ca.if_else(finite, S, ca.SX.zeros(S.shape)), ca.if_else(finite, rhs, 0 * rhs)]
-    return ca.Function(f"{build.name()}_guarded", args, [*guarded, *carried])
-
-
-def _stand_in(obj: T, packed: ca.SX, at: int) -> tuple[T, list[ca.SX], int]:
-    """``obj`` (a dataclass of SX expressions) with each expression replaced by the entries of the symbol
-    ``packed`` from ``at`` on, in its sparsity; the expressions' nonzeros; where the next entry is. To evaluate
-    a graph in two functions without computing twice."""
-    values, fields = [], {}
-    for f in dataclasses.fields(obj):  # type: ignore[arg-type]
-        value = getattr(obj, f.name)
-        if isinstance(value, ca.SX):
-            nnz = value.nnz()
-            fields[f.name] = ca.SX(value.sparsity(), packed[at : at + nnz])
-            values.append(ca.vec(value.nz[:]))
-            at += nnz
-    return dataclasses.replace(obj, **fields), values, at  # type: ignore[type-var]
-
-
-@dataclass(frozen=True)
-class QPParts:
-    """A step whose QP is solved between two functions.
-
-    ``build(inputs) -> [H, Ŝ (rows scaled), r̂ (scaled), *carried]`` poses the QP and carries on the
-    numbers the step's outputs need (the problem's data, its reduction, the row scales);
-    ``finish(*carried, z, y) -> OUTPUTS`` forms the outputs from the QP's solution ``z`` and
-    multipliers ``y`` without computing the reduction a second time.
-    """
-
-    build: ca.Function
-    finish: ca.Function
-    backend: QPBackend
-
-    def graph(self, args: Sequence[ca.MX], only: Sequence[int] | None = None) -> list[ca.MX]:
-        """The step's outputs (or those at positions ``only``) as MX, the QP a node of the graph."""
-        return self.graph_and_solution(args, only)[0]
-
-    def graph_and_solution(self, args: Sequence[ca.MX], only: Sequence[int] | None = None) -> tuple[list[ca.MX], ca.MX]:
-        """:meth:`graph`, and the QP's solution ``(z, y)`` stacked (to replay the step, :meth:`replay`)."""
-        H, S, rhs, *carried = self.build(*args)
-        z, y = self.backend.graph(H, S, rhs)
-        finish = self.finish if only is None else only_outputs(self.finish, only)
-        return list(finish(*carried, z, y)), ca.vertcat(z, y)
-
-    def replay(self) -> ca.Function:
-        """``(inputs, (z, y)) -> OUTPUTS``: the step's outputs from a known QP solution, no QP solved (an SX
-        function: the build and the finish only). Given the solution the QP returned for the same inputs, the
-        outputs are those of the step itself."""
-        args = self.build.sx_in()
-        _, S, rhs, *carried = self.build.call(args)
-        solution = ca.SX.sym("solution", S.shape[1] + S.shape[0])
-        z, y = solution[: S.shape[1]], solution[S.shape[1] :]
-        return ca.Function("replay", [*args, solution], self.finish.call([*carried, z, y]))
-
-
-def only_outputs(fn: ca.Function, outputs: Sequence[int]) -> ca.Function:
-    """An SX function computing only the chosen outputs of ``fn`` (the rest is dropped from the graph)."""
-    args = fn.sx_in()
-    res = fn.call(args)
-    return ca.Function(f"{fn.name()}_part", args, [res[i] for i in outputs])
-
-
-def p_nnz(obj: object) -> int:
-    """How many nonzeros the SX fields of a dataclass hold."""
-    values = (getattr(obj, f.name) for f in dataclasses.fields(obj))  # type: ignore[arg-type]
-    return int(np.sum([v.nnz() for v in values if isinstance(v, ca.SX)]))
-
-
-def qp_parts(name: str, inputs: list[ca.SX], p: StepExpressions, backend: QPBackend, refine: bool) -> QPParts:
-    """The QP route's :class:`QPParts` for the step ``p`` (expressions of ``inputs``)."""
-    red = reduce(p)
-    k, m = red.S_hat.shape
-    z, y = ca.SX.sym("z", m), ca.SX.sym("y", k)
-    # Rows scaled to unit length: a small margin makes Ŝ small, which QP codes take for a
-    # degenerate row; the scaled constraint is the same set, and y is scaled back for the checks.
-    norms = ca.sqrt(ca.sum2(red.S_hat * red.S_hat))
-    rows = ca.if_else(norms > 0, 1 / norms, 1)
-    scaled = ca.diag(rows) @ red.S_hat
-    size = p_nnz(p) + p_nnz(red) + k
-    packed = ca.SX.sym("carried", size)
-    p_in, p_values, at = _stand_in(p, packed, 0)
-    red_in, red_values, at = _stand_in(red, packed, at)
-    rows_in = packed[at:]
-    carried = ca.vertcat(*p_values, *red_values, rows)
-    qp_data = [ca.densify(e) for e in (ca.SX.eye(m), scaled, rows * red.rhs_hat)]
-    build = ca.Function(f"{name}_qp_data", inputs, ca.cse([*qp_data, carried]))
-    refines = refine and not well_conditioned_constant(p.A)  # decided on the data, not on their stand-ins
-    results = outputs(p_in, red_in, z, rows_in * y, refines)
-    finish = ca.Function(f"{name}_qp_finish", [packed, z, y], dense_outputs(results))
-    return QPParts(build, finish, backend)
-
-
 def build_kernel(
-    name: str, inputs: list[ca.SX], p: StepExpressions, solver: str, backend: QPBackend | None, refine: bool = True
+    name: str,
+    inputs: list[ca.SX],
+    p: StepExpressions,
+    solver: str,
+    backend: QPBackend | None,
+    refine: bool = True,
+    route: str = "dense",
 ) -> Kernel:
-    """Compile the step ``p`` (expressions of ``inputs``) for ``solver`` ∈ {"direct", "qp"}."""
+    """Compile the step ``p`` (expressions of ``inputs``) for ``solver`` ∈ {"direct", "qp"} by ``route`` ∈
+    {"dense", "sparse"} (:func:`gausspp.step.sparse.choose_route` picks one)."""
     if solver == "direct":
-        red = reduce(p)
-        return CompiledKernel(
-            ca.Function(f"{name}_direct", inputs, dense_outputs(outputs(p, red, direct_reaction(red), None, refine)))
-        )
+        if route == "sparse":
+            sred = sparse.sparse_reduce(p)
+            require_square(*sred.S.shape)
+            refines = refine and not well_conditioned_constant(p.A)  # as the dense route's outputs decide
+            results = sparse.sparse_outputs(p, sred, sred.solve_S(sred.rhs), None, refines)
+        else:
+            red = reduce(p)
+            results = outputs(p, red, direct_reaction(red), None, refine)
+        return CompiledKernel(ca.Function(f"{name}_direct", inputs, dense_outputs(results)))
     assert backend is not None
-    parts = qp_parts(name, inputs, p, backend, refine)
+    parts = qp_parts(name, inputs, p, backend, refine, route, dense_data=not backend.compiled)
     if not backend.compiled:
         return PythonQPKernel(parts)
     mx_in = [ca.MX.sym(f"in{i}", s.sparsity()) for i, s in enumerate(inputs)]
-    guarded = QPParts(_guard(parts.build), parts.finish, backend)
-    kernel = CompiledKernel(ca.Function(f"{name}_qp", mx_in, guarded.graph(mx_in)), guarded)
+    safe = guarded(parts)
+    kernel = CompiledKernel(ca.Function(f"{name}_qp", mx_in, safe.graph(mx_in)), safe)
     with stdout_silenced():  # some plugins (qpOASES) print a banner on their first solve
         try:
             kernel.evaluate()

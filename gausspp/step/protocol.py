@@ -60,6 +60,7 @@ class StepModel(Protocol):
     contact_tol: float
     nq: int
     nv: int
+    route: str
 
     @property
     def lam0(self) -> np.ndarray | None:

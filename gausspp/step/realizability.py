@@ -99,7 +99,13 @@ def stacked_margins(S_norm: np.ndarray, k: int, m: int) -> np.ndarray:
         return np.sqrt(np.einsum("ij,ij->i", S_norm[:, 0, :], S_norm[:, 0, :]))
     out = np.full(n, np.nan)  # NaN in, NaN out (as margin_of): the SVD is not even tried on those
     finite = np.isfinite(S_norm).all(axis=(1, 2))
-    out[finite] = np.linalg.svd(S_norm[finite], compute_uv=False)[:, -1]
+    S = S_norm[finite]
+    if k == m and np.all(np.abs(S - S.transpose(0, 2, 1)) <= 1e-13 * np.abs(S).max(initial=0.0)):
+        # symmetric (ideal constraints: S = J A⁻¹ Jᵀ, rows and columns normalized alike): the singular values
+        # are the eigenvalues' magnitudes, and the symmetric eigensolver is several times faster than the SVD
+        out[finite] = np.abs(np.linalg.eigvalsh(S)).min(axis=1)
+    else:
+        out[finite] = np.linalg.svd(S, compute_uv=False)[:, -1]
     return out
 
 

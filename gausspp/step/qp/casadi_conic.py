@@ -93,6 +93,7 @@ class CasadiConic(QPBackend):
         self.name = name or f"casadi:{plugin}"
         self.options = {"error_on_fail": False, **(PLUGINS[plugin][0] if options is None else options)}
         self.description = PLUGINS[plugin][1]
+        self._sparse: dict[tuple[Any, ...], ca.Function] = {}  # conics posed with sparse patterns, by pattern
 
     @functools.cache  # noqa: B019 - backends are few, long-lived singletons
     def _conic(self, m: int, k: int) -> ca.Function:
@@ -105,9 +106,23 @@ class CasadiConic(QPBackend):
             )
 
     def graph(self, H: ca.MX, S: ca.MX, rhs: ca.MX) -> tuple[ca.MX, ca.MX]:
+        """The QP ``min ½ xᵀHx`` s.t. ``S x = rhs`` as a node of an MX graph, posed with the sparsity ``H`` and
+        ``S`` have there (a sparse step's QP stays sparse for the plugin)."""
         m, k = H.shape[0], S.shape[0]
-        sol = self._conic(m, k)(h=H, g=ca.MX.zeros(m), a=S, lba=rhs, uba=rhs)
+        if H.sparsity().is_dense() and S.sparsity().is_dense():
+            conic = self._conic(m, k)
+        else:
+            conic = self._sparse_conic(H.sparsity(), S.sparsity())
+        sol = conic(h=H, g=ca.MX.zeros(m), a=S, lba=rhs, uba=rhs)
         return sol["x"], sol["lam_a"]
+
+    def _sparse_conic(self, h: ca.Sparsity, a: ca.Sparsity) -> ca.Function:
+        key = tuple((sp.size(), *map(tuple, sp.get_triplet())) for sp in (h, a))  # the two patterns
+        if key not in self._sparse:
+            with stdout_silenced():
+                name = f"gauss_qp_{self.plugin}_sparse"
+                self._sparse[key] = ca.conic(name, self.plugin, {"h": h, "a": a}, self.options)
+        return self._sparse[key]
 
     def solve(self, H: np.ndarray, S: np.ndarray, rhs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         m, k = H.shape[0], S.shape[0]

@@ -1,0 +1,122 @@
+"""The sparse step route (gausspp/step/sparse.py) against the dense one: the same step on every scene and on chains.
+
+The two routes share the model's expressions and nothing of the elimination: the dense route whitens the reaction
+space with Cholesky factors of ``J A⁻¹ Jᵀ`` and ``Dᵀ A⁻¹ D``, the sparse one factors ``A`` and ``S = J A⁻¹ D``
+with casadi's sparse LDLᵀ/QR. Their outputs must agree to round-off (1e-10 relative), for the direct solution and
+for the QP, on every realization the scenes have (ideal, servo, inertial with λ, vakonomic, mixed, redundant).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import gausspp as gp
+from gausspp.step import sparse
+
+FIELDS = ("a", "u", "reaction", "compulsion", "S_norm", "residual", "a_free", "qdot", "power_reaction")
+SCENES = [n for n in gp.scenes.names() if not (gp.scenes.get(n).model.contacts or gp.scenes.get(n).model.bounded)]
+
+
+def with_route(model: gp.Model, route: str) -> gp.Model:
+    """The same model with its step eliminated by ``route``."""
+    return gp.Model(
+        model.mechanism,
+        [*model.constraints, *model.contacts],
+        margin_warn=model.margin_warn,
+        margin_error=model.margin_error,
+        refine=model.refine,
+        contact_tol=model.contact_tol,
+        route=route,
+    )
+
+
+def outputs(model: gp.Model, solver: str, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> dict[str, np.ndarray]:
+    out = model.kernel(solver)(0.0, q, v, lam, np.zeros(2))
+    return {name: np.array(value, copy=True) for name, value in out.items()}
+
+
+def agree(x: dict[str, np.ndarray], y: dict[str, np.ndarray], rtol: float = 1e-10) -> bool:
+    """Every field within ``rtol`` of the larger of its size and the free acceleration's (the step's scale)."""
+    scale = max(np.abs(y["a_free"]).max(initial=0.0), np.abs(y["a"]).max(initial=0.0), 1.0)
+    for name in FIELDS:
+        size = max(np.abs(y[name]).max(initial=0.0), scale if name in ("a", "residual", "qdot") else 1.0)
+        if x[name].shape != y[name].shape or not np.all(np.abs(x[name] - y[name]) <= rtol * size):
+            return False
+    return (x["pivot"] > 0) == (y["pivot"] > 0)
+
+
+def state(scene: gp.scenes.Scene) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    lam = scene.lam0 if scene.lam0 is not None else np.zeros(scene.model.n_lam)
+    return np.asarray(scene.q0, float), np.asarray(scene.v0, float), np.asarray(lam, float)
+
+
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+@pytest.mark.parametrize("name", SCENES)
+def test_sparse_and_dense_routes_agree_on_every_scene(name: str, solver: str) -> None:
+    scene = gp.scenes.get(name)
+    if solver == "direct" and scene.model.k != scene.model.m:
+        pytest.skip("no direct solution: more reaction unknowns than rows")
+    dense, sparse_ = with_route(scene.model, "dense"), with_route(scene.model, "sparse")
+    assert (dense.route, sparse_.route) == ("dense", "sparse")
+    q, v, lam = state(scene)
+    if name == "four-bar-redundant":  # no step of its own (S singular): both routes hand it to the general QP
+        if solver == "direct":
+            for model in (dense, sparse_):
+                with pytest.raises(gp.RealizabilityError, match="needs independent rows"):
+                    model.step(0.0, q, v, lam, solver="direct")
+        else:
+            got, ref = sparse_.step(0.0, q, v, lam), dense.step(0.0, q, v, lam)
+            assert got.solver == ref.solver and np.allclose(got.a, ref.a, rtol=1e-10, atol=1e-10)
+        return
+    reference = outputs(dense, solver, q, v, lam)
+    got = outputs(sparse_, solver, q, v, lam)
+    assert agree(got, reference), name
+    wrong = {**got, "a": got["a"] * (1 + 1e-8) + 1e-8}
+    assert not agree(wrong, reference)  # the comparison sees a wrong acceleration
+
+
+def chain(n: int) -> gp.scenes.Scene:
+    return gp.scenes.get("planar-chain", N=n)
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 16])
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+def test_sparse_and_dense_routes_agree_on_chains(n: int, solver: str) -> None:
+    scene = chain(n)
+    q, v, lam = state(scene)
+    rng = np.random.default_rng(n)
+    v = v + 0.3 * rng.standard_normal(v.size)  # moving, and off the velocity constraint: a general state
+    reference = outputs(with_route(scene.model, "dense"), solver, q, v, lam)
+    assert agree(outputs(with_route(scene.model, "sparse"), solver, q, v, lam), reference)
+
+
+def test_auto_takes_the_sparse_route_for_many_rows_and_says_so() -> None:
+    assert gp.scenes.get("pendulum").model.route == "dense"  # two rows: the dense route's robustness
+    big = chain(8).model
+    assert big.k == 16 and big.route == "sparse" and big.route_requested == "auto"
+    traj = gp.simulate(big, chain(8).q0, chain(8).v0, 0.02, dt=1e-3, method="rk4", solver="direct")
+    assert traj.route == "sparse" and traj.lane == "compiled" and traj.status == "success"
+    assert with_route(big, "dense").route == "dense"
+    with pytest.raises(gp.UnknownNameError, match="route='fast' is unknown"):
+        with_route(big, "fast")
+
+
+def test_a_dense_mass_matrix_keeps_the_dense_route() -> None:
+    """Many rows on a mass matrix with no zero entry (one body coupling all coordinates): nothing to exploit."""
+    n = 10
+    C = np.eye(n) + 0.1
+    body = gp.Lagrangian(n=n, T=lambda q, v, t: 0.5 * sum(C[i, j] * v[i] * v[j] for i in range(n) for j in range(n)))
+    rows = [gp.Constraint(lambda q, v, t, i=i: v[i] - v[i + 1], name=f"c{i}") for i in range(sparse.SPARSE_FROM_ROWS)]
+    assert gp.Model(body, rows).route == "dense"
+
+
+def test_the_sparse_step_through_model_step_and_the_hot_path() -> None:
+    scene = chain(6)
+    model = scene.model
+    q, v, _ = state(scene)
+    for solver in ("direct", "qp"):
+        result = model.step(0.0, q, v, solver=solver)
+        reference = with_route(model, "dense").step(0.0, q, v, solver=solver)
+        assert np.allclose(result.a, reference.a, rtol=1e-10, atol=1e-10 * np.abs(reference.free_acceleration).max())
+        assert result.margin == pytest.approx(reference.margin, rel=1e-10)
