@@ -24,6 +24,9 @@ at the pins with ``benchmarks/peers.py``'s stiffest settings — and of MuJoCo's
 reduced coordinates, no constraint). ``tip`` is the largest distance, at ``T``, of the chain's free end from
 the hinge chain's (gausspp direct and MuJoCo maximal): both integrate the same motion.
 
+``--mechanism ladder`` times the closed-loop ``planar-ladder`` scene instead (``N`` parallelogram four-bars stacked:
+two rails and a rung per level, ``9N`` coordinates, ``8N`` rows; gausspp only).
+
 Printed: the table, the growth exponents (least squares of ``log time`` on ``log N`` over the ``N ≥ 8`` that
 ran) and, with ``--figure PATH`` and matplotlib, a log–log figure of the per-step times.
 """
@@ -48,6 +51,11 @@ from _timing import best_us
 NS = (1, 2, 4, 8, 16, 32, 64, 128)
 DT, STEPS = 1e-3, 1000
 CHAIN = dict(m=1.0, L=1.0, g=9.81, theta0=-0.3, t_end=STEPS * DT)
+#: mechanism → (scene, its parameters): the chain, and a closed-loop one (a ladder of parallelogram four-bars)
+MECHANISMS: dict[str, tuple[str, dict[str, float]]] = {
+    "chain": ("planar-chain", CHAIN),
+    "ladder": ("planar-ladder", dict(m=1.0, L=1.0, W=1.0, g=9.81, theta0=-1.0, t_end=STEPS * DT)),
+}
 FIT_FROM = 8  # growth exponents over N ≥ FIT_FROM
 
 
@@ -71,11 +79,12 @@ def free_end(q: np.ndarray, L: float) -> np.ndarray:
     return np.array([x + 0.5 * L * math.cos(theta), z + 0.5 * L * math.sin(theta)])
 
 
-def gausspp_child(N: int, solver: str) -> dict[str, Any]:
+def gausspp_child(N: int, solver: str, mechanism: str) -> dict[str, Any]:
     """Build, first run, second run, one ``model.step`` (direct), violation and the free end at ``T``."""
     import gausspp as gp
 
-    build, scene = timed(lambda: gp.scenes.get("planar-chain", N=N, **CHAIN))
+    name, params = MECHANISMS[mechanism]
+    build, scene = timed(lambda: gp.scenes.get(name, N=N, **params))
     model, q0, v0 = scene.model, scene.q0, scene.v0
 
     def run() -> Any:
@@ -177,11 +186,11 @@ def mujoco_child(N: int) -> dict[str, Any]:
     return out
 
 
-def child(route: str, N: int, memory_gb: float) -> None:
+def child(route: str, N: int, memory_gb: float, mechanism: str) -> None:
     """Run one route at one ``N`` and print its figures as one JSON line."""
     limit = int(memory_gb * 2**30)
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-    out = mujoco_child(N) if route == "mujoco" else gausspp_child(N, route)
+    out = mujoco_child(N) if route == "mujoco" else gausspp_child(N, route, mechanism)
     out["peak_mb"] = peak_mb()
     print(json.dumps(out))
 
@@ -192,6 +201,7 @@ def child(route: str, N: int, memory_gb: float) -> None:
 def spawn(route: str, N: int, args: argparse.Namespace) -> dict[str, Any]:
     """One child; ``{"status": "over budget" | "out of memory" | "failed: …"}`` when it gives no figures."""
     command = [sys.executable, __file__, "--child", route, str(N), "--memory", str(args.memory)]
+    command += ["--mechanism", args.mechanism]
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=args.budget)
     except subprocess.TimeoutExpired:
@@ -303,7 +313,7 @@ def print_exponents(results: dict[str, dict[int, dict[str, Any]]]) -> None:
             print(f"  {label:32s} p = {p:5.2f}  ({count} points)" if count >= 2 else f"  {label:32s} (too few N)")
 
 
-def figure(results: dict[str, dict[int, dict[str, Any]]], path: str) -> None:
+def figure(results: dict[str, dict[int, dict[str, Any]]], path: str, title: str) -> None:
     """Per-step time against N, log–log (matplotlib, optional)."""
     try:
         import matplotlib
@@ -318,7 +328,7 @@ def figure(results: dict[str, dict[int, dict[str, Any]]], path: str) -> None:
         points = sorted((N, r[key]) for N, r in results.get(route, {}).items() if r["status"] == "ok" and key in r)
         if points and key != "first_s":
             ax.loglog(*zip(*points, strict=True), "o-", label=label)
-    ax.set(xlabel="N links", ylabel="µs per step", title=f"planar chain, RK4, dt = {DT:g}")
+    ax.set(xlabel="N links (levels of the ladder)", ylabel="µs per step", title=f"{title}, RK4, dt = {DT:g}")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
@@ -334,24 +344,27 @@ def main() -> None:
     parser.add_argument("--memory", type=float, default=8.0, help="GB of address space per child (default 8)")
     parser.add_argument("--solvers", default="direct,qp", help="gausspp step solvers, comma-separated")
     parser.add_argument("--figure", metavar="PATH", help="per-step time against N, log–log (needs matplotlib)")
+    parser.add_argument("--mechanism", choices=list(MECHANISMS), default="chain", help="default: chain")
     parser.add_argument("--child", nargs=2, metavar=("ROUTE", "N"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        child(args.child[0], int(args.child[1]), args.memory)
+        child(args.child[0], int(args.child[1]), args.memory, args.mechanism)
         return
     routes = [s.strip() for s in args.solvers.split(",") if s.strip()]
     try:
         import mujoco  # noqa: F401
 
-        routes.append("mujoco")
+        if args.mechanism == "chain":  # MuJoCo's models are the chain's
+            routes.append("mujoco")
     except ImportError:
         print("mujoco is not installed (pip install gausspp[peers]): its columns are skipped")
     results = measure(routes, args)
-    print(f"\nplanar chain, rk4-compiled, dt = {DT:g}, {STEPS} steps; budget {args.budget:g} s per N and route")
+    scene = MECHANISMS[args.mechanism][0]
+    print(f"\n{scene}, rk4-compiled, dt = {DT:g}, {STEPS} steps; budget {args.budget:g} s per N and route")
     print_table(results, args)
     print_exponents(results)
     if args.figure:
-        figure(results, args.figure)
+        figure(results, args.figure, MECHANISMS[args.mechanism][0])
 
 
 if __name__ == "__main__":

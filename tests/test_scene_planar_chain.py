@@ -72,3 +72,22 @@ def test_one_link_is_the_pendulum() -> None:
 def test_bad_size_is_refused() -> None:
     with pytest.raises(gp.InputError, match="N must be a positive integer"):
         gp.scenes.get("planar-chain", N=0)
+
+
+@pytest.mark.parametrize("N", [1, 2])
+def test_ladder_of_four_bars_keeps_its_loops_and_its_energy(N: int) -> None:
+    scene = gp.scenes.get("planar-ladder", N=N)
+    assert scene.q0.shape == (9 * N,)
+    traj = run(scene, 0.3)
+    assert traj.success and traj.g.shape[1] == 8 * N
+    assert np.abs(traj.g[0]).max() < 1e-14 and np.abs(traj.residual[0]).max() < 1e-14
+    assert np.abs(traj.g[-1]).max() < 1e-8 and np.abs(traj.residual[-1]).max() < 1e-8
+    assert np.abs(traj.energy - traj.energy[0]).max() < 1e-6 * max(1.0, abs(traj.energy[0]))
+    rungs = traj.q[:, 8::9]  # a parallelogram keeps each rung level
+    np.testing.assert_allclose(rungs, 0.0, atol=1e-8)
+    assert np.abs(traj.q[-1] - traj.q[0]).max() > 1e-2
+
+
+def test_ladder_refuses_rails_level_with_the_rungs() -> None:
+    with pytest.raises(gp.InputError, match="theta0"):
+        gp.scenes.get("planar-ladder", theta0=0.0)

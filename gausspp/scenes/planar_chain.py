@@ -46,24 +46,29 @@ def end(q: Any, link: int, sign: int, L: float) -> Any:
     return ca.vertcat(x + sign * 0.5 * L * ca.cos(theta), z + sign * 0.5 * L * ca.sin(theta))
 
 
-def pin(link: int, L: float) -> Holonomic:
-    """The two rows pinning ``link``'s top to the previous link's bottom (to the origin for link 0)."""
-    if link == 0:
-        return Holonomic(lambda q, t: end(q, 0, -1, L), name="pin-1")
-    return Holonomic(lambda q, t: end(q, link, -1, L) - end(q, link - 1, +1, L), name=f"pin-{link + 1}")
+def pin(name: str, first: tuple[int, int, float], to: tuple[int, int, float] | tuple[float, float]) -> Holonomic:
+    """Two rows pinning the end ``first = (bar, sign, length)`` (see :func:`end`) to ``to``: an end of another bar
+    or a point ``(x, z)`` of the ground. The rows read the coordinates of those bars only."""
+    if len(to) == 3:
+        return Holonomic(lambda q, t: end(q, *first) - end(q, *to), name=name)
+    point = ca.DM(to)
+    return Holonomic(lambda q, t: end(q, *first) - point, name=name)
 
 
-def links(N: int, m: float, L: float, g: float) -> Lagrangian:
-    """``N`` free bars in the plane: ``T`` diagonal in the velocities, ``V = Σ m g zᵢ``."""
-    inertia = m * L * L / 12.0
+def bars(lengths: list[float], m: float, g: float) -> Lagrangian:
+    """Free bars in the plane, each of mass ``m`` and moment ``m lᵢ²/12``: ``T`` diagonal, ``V = Σ m g zᵢ``."""
+    inertias = [m * length * length / 12.0 for length in lengths]
 
     def kinetic(q: Any, v: Any, t: Any) -> Any:
-        return sum(0.5 * m * (v[3 * i] ** 2 + v[3 * i + 1] ** 2) + 0.5 * inertia * v[3 * i + 2] ** 2 for i in range(N))
+        return sum(
+            0.5 * m * (v[3 * i] ** 2 + v[3 * i + 1] ** 2) + 0.5 * inertia * v[3 * i + 2] ** 2
+            for i, inertia in enumerate(inertias)
+        )
 
     def potential(q: Any, t: Any) -> Any:
-        return sum(m * g * q[3 * i + 1] for i in range(N))
+        return sum(m * g * q[3 * i + 1] for i in range(len(lengths)))
 
-    return Lagrangian(n=3 * N, T=kinetic, V=potential)
+    return Lagrangian(n=3 * len(lengths), T=kinetic, V=potential)
 
 
 def straight(N: int, L: float, theta0: float) -> np.ndarray:
@@ -84,7 +89,9 @@ def build(
         raise InputError(f"planar-chain: N must be a positive integer, got N={N!r}; give N = 1, 2, …")
     if not (m > 0 and L > 0):
         raise InputError(f"planar-chain: m and L must be positive, got m={m}, L={L}")
-    model = Model(links(N, m, L, g), [pin(i, L) for i in range(N)])
+    pins = [pin("pin-1", (0, -1, L), (0.0, 0.0))]
+    pins += [pin(f"pin-{i + 1}", (i, -1, L), (i - 1, +1, L)) for i in range(1, N)]
+    model = Model(bars([L] * N, m, g), pins)
     exact = None
     if N == 1:  # the pendulum scene's reference: centre of mass at L/2 from the pin, Ic = m L²/12
         exact = pendulum.build(m=m, Ic=m * L * L / 12.0, L=0.5 * L, g=g, phi0=theta0, t_end=t_end).exact
@@ -99,3 +106,54 @@ def build(
         description=f"planar chain of {N} pinned links in maximal coordinates ({3 * N} coordinates, {2 * N} rows)",
         params=dict(N=N, m=m, L=L, g=g, theta0=theta0, t_end=t_end),
     )
+
+
+def build_planar_ladder(
+    N: int = 2,
+    m: float = 1.0,
+    L: float = 1.0,
+    W: float = 1.0,
+    g: float = 9.81,
+    theta0: float = -1.0,
+    t_end: float = 1.0,
+) -> Scene:
+    """Ladder of N parallelogram four-bars in maximal coordinates (closed loops: 9N coordinates, 8N rows)."""
+    if not N >= 1:
+        raise InputError(f"planar-ladder: N must be a positive integer, got N={N!r}; give N = 1, 2, …")
+    if not (m > 0 and L > 0 and W > 0):
+        raise InputError(f"planar-ladder: m, L and W must be positive, got m={m}, L={L}, W={W}")
+    if not abs(np.sin(theta0)) > 0.1:
+        raise InputError(
+            f"planar-ladder: theta0={theta0} leaves the rails nearly level with the rungs; use |sin θ0| > 0.1"
+        )
+    model = Model(bars([L, L, W] * N, m, g), [p for i in range(N) for p in ladder_pins(i, L, W)])
+    e = np.array([np.cos(theta0), np.sin(theta0)])
+    q0 = np.empty(9 * N)
+    for i in range(N):  # left rail, right rail, rung
+        q0[9 * i : 9 * i + 6] = [*((i + 0.5) * L * e), theta0, *((i + 0.5) * L * e + (W, 0)), theta0]
+        q0[9 * i + 6 : 9 * i + 9] = [*((i + 1) * L * e + (0.5 * W, 0)), 0.0]
+    return Scene(
+        name="planar-ladder",
+        model=model,
+        q0=q0,
+        v0=np.zeros(9 * N),
+        lam0=None,
+        t_end=float(t_end),
+        exact=None,
+        description=f"ladder of {N} parallelogram four-bars in maximal coordinates ({9 * N} coordinates, {8 * N} rows)",
+        params=dict(N=N, m=m, L=L, W=W, g=g, theta0=theta0, t_end=t_end),
+    )
+
+
+def ladder_pins(level: int, L: float, W: float) -> list[Holonomic]:
+    """A level's four pins: each rail's top to the rail above (the ground at ``(0, 0)`` and ``(W, 0)`` for the
+    first), the rung's ends to the rails' bottoms. Bars ``3i, 3i + 1, 3i + 2``: left rail, right rail, rung."""
+    left, right, rung = 3 * level, 3 * level + 1, 3 * level + 2
+    above: list[Any] = [(left - 3, +1, L), (right - 3, +1, L)] if level else [(0.0, 0.0), (W, 0.0)]
+    n = level + 1
+    return [
+        pin(f"left-{n}", (left, -1, L), above[0]),
+        pin(f"right-{n}", (right, -1, L), above[1]),
+        pin(f"rung-{n} left", (rung, -1, W), (left, +1, L)),
+        pin(f"rung-{n} right", (rung, +1, W), (right, +1, L)),
+    ]
