@@ -109,7 +109,7 @@ def build(
 
 
 def build_planar_ladder(
-    N: int = 2,
+    N: int = 1,
     m: float = 1.0,
     L: float = 1.0,
     W: float = 1.0,
