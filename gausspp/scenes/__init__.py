@@ -34,6 +34,8 @@ _MODULES: dict[str, str] = {
     "saturated-crane": "saturated_crane",
     "two-actuator-servo": "two_actuator_servo",
     "four-bar-redundant": "four_bar",
+    "planar-chain": "planar_chain",
+    "planar-ladder": "planar_chain",
 }
 
 #: Scenes whose step is not a square equality system (contacts, bounded or extra actuators, redundant

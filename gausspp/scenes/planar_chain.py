@@ -1,0 +1,159 @@
+"""A planar chain of ``N`` links in maximal coordinates (issue 18): the scaling problem.
+
+Link ``i`` (``i = 1 … N``) is a rigid bar with coordinates ``(xᵢ, zᵢ, θᵢ)``: its centre of mass and
+its angle from the ``x`` axis; mass ``m``, length ``L``, central moment of inertia ``m L²/12``,
+gravity ``g`` along ``−z``. So ``q ∈ ℝ³ᴺ``, the mass matrix is the constant diagonal
+``A = diag(m, m, m L²/12, …)`` and
+
+    ``T = Σ ½ m (ẋᵢ² + żᵢ²) + ½ (m L²/12) θ̇ᵢ²``,   ``V = Σ m g zᵢ``.
+
+The link's ends are ``pᵢ∓ = (xᵢ, zᵢ) ∓ (L/2)(cos θᵢ, sin θᵢ)`` (top ``−``, bottom ``+``). Pin joints,
+ideal holonomic constraints of two rows each (``2N`` rows in all):
+
+    ``pin-1:  p₁⁻ = 0``   (the top of link 1 at the origin),
+    ``pin-i:  pᵢ⁻ − pᵢ₋₁⁺ = 0``   (``i ≥ 2``).
+
+Each pin's rows are written on the six coordinates of the two links it joins only, so the
+constraint Jacobian ``J`` (``2N × 3N``) is block bidiagonal in casadi's sparsity pattern and
+``J A⁻¹ Jᵀ`` is banded: the structure a sparse step route can exploit.
+
+Initial data: the chain straight, at ``theta0`` from the horizontal (default ``−0.3``: 0.3 rad below
+it), hanging from the pin at rest — on the constraint manifold. The chain has ``N`` degrees of
+freedom; for ``N = 1`` it is the ``pendulum`` scene with ``L/2`` from the pin to the centre of mass
+and ``Ic = m L²/12``, whose ``exact`` (the 1-DOF equation about the pin, solved to ~1e-12) is this
+scene's reference; for ``N ≥ 2`` there is no closed form (``exact`` is ``None``): the energy is
+conserved and the pins hold, which the tests check.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import InputError
+from ..model.constraints import Holonomic
+from ..model.mechanism import Lagrangian
+from ..model.model import Model
+from . import pendulum
+from .scene import Scene
+
+
+def end(q: Any, link: int, sign: int, L: float) -> Any:
+    """The top (``sign = −1``) or bottom (``sign = +1``) end of ``link`` (0-based): ``(x, z) ± (L/2)(cos θ, sin θ)``."""
+    x, z, theta = q[3 * link], q[3 * link + 1], q[3 * link + 2]
+    return ca.vertcat(x + sign * 0.5 * L * ca.cos(theta), z + sign * 0.5 * L * ca.sin(theta))
+
+
+def pin(name: str, first: tuple[int, int, float], to: tuple[int, int, float] | tuple[float, float]) -> Holonomic:
+    """Two rows pinning the end ``first = (bar, sign, length)`` (see :func:`end`) to ``to``: an end of another bar
+    or a point ``(x, z)`` of the ground. The rows read the coordinates of those bars only."""
+    if len(to) == 3:
+        return Holonomic(lambda q, t: end(q, *first) - end(q, *to), name=name)
+    point = ca.DM(to)
+    return Holonomic(lambda q, t: end(q, *first) - point, name=name)
+
+
+def bars(lengths: list[float], m: float, g: float) -> Lagrangian:
+    """Free bars in the plane, each of mass ``m`` and moment ``m lᵢ²/12``: ``T`` diagonal, ``V = Σ m g zᵢ``."""
+    inertias = [m * length * length / 12.0 for length in lengths]
+
+    def kinetic(q: Any, v: Any, t: Any) -> Any:
+        return sum(
+            0.5 * m * (v[3 * i] ** 2 + v[3 * i + 1] ** 2) + 0.5 * inertia * v[3 * i + 2] ** 2
+            for i, inertia in enumerate(inertias)
+        )
+
+    def potential(q: Any, t: Any) -> Any:
+        return sum(m * g * q[3 * i + 1] for i in range(len(lengths)))
+
+    return Lagrangian(n=3 * len(lengths), T=kinetic, V=potential)
+
+
+def straight(N: int, L: float, theta0: float) -> np.ndarray:
+    """The chain straight at angle ``theta0``, its first link's top at the origin: ``q`` (3N,)."""
+    e = np.array([np.cos(theta0), np.sin(theta0)])
+    q = np.empty(3 * N)
+    for i in range(N):
+        q[3 * i : 3 * i + 2] = (i + 0.5) * L * e
+        q[3 * i + 2] = theta0
+    return q
+
+
+def build(
+    N: int = 4, m: float = 1.0, L: float = 1.0, g: float = 9.81, theta0: float = -0.3, t_end: float = 1.0
+) -> Scene:
+    """Planar chain of N pinned links in maximal coordinates (3N coordinates, 2N rows): the scaling problem."""
+    if not N >= 1:
+        raise InputError(f"planar-chain: N must be a positive integer, got N={N!r}; give N = 1, 2, …")
+    if not (m > 0 and L > 0):
+        raise InputError(f"planar-chain: m and L must be positive, got m={m}, L={L}")
+    pins = [pin("pin-1", (0, -1, L), (0.0, 0.0))]
+    pins += [pin(f"pin-{i + 1}", (i, -1, L), (i - 1, +1, L)) for i in range(1, N)]
+    model = Model(bars([L] * N, m, g), pins)
+    exact = None
+    if N == 1:  # the pendulum scene's reference: centre of mass at L/2 from the pin, Ic = m L²/12
+        exact = pendulum.build(m=m, Ic=m * L * L / 12.0, L=0.5 * L, g=g, phi0=theta0, t_end=t_end).exact
+    return Scene(
+        name="planar-chain",
+        model=model,
+        q0=straight(N, L, theta0),
+        v0=np.zeros(3 * N),
+        lam0=None,
+        t_end=float(t_end),
+        exact=exact,
+        description=f"planar chain of {N} pinned links in maximal coordinates ({3 * N} coordinates, {2 * N} rows)",
+        params=dict(N=N, m=m, L=L, g=g, theta0=theta0, t_end=t_end),
+    )
+
+
+def build_planar_ladder(
+    N: int = 1,
+    m: float = 1.0,
+    L: float = 1.0,
+    W: float = 1.0,
+    g: float = 9.81,
+    theta0: float = -1.0,
+    t_end: float = 1.0,
+) -> Scene:
+    """Ladder of N parallelogram four-bars in maximal coordinates (closed loops: 9N coordinates, 8N rows)."""
+    if not N >= 1:
+        raise InputError(f"planar-ladder: N must be a positive integer, got N={N!r}; give N = 1, 2, …")
+    if not (m > 0 and L > 0 and W > 0):
+        raise InputError(f"planar-ladder: m, L and W must be positive, got m={m}, L={L}, W={W}")
+    if not abs(np.sin(theta0)) > 0.1:
+        raise InputError(
+            f"planar-ladder: theta0={theta0} leaves the rails nearly level with the rungs; use |sin θ0| > 0.1"
+        )
+    model = Model(bars([L, L, W] * N, m, g), [p for i in range(N) for p in ladder_pins(i, L, W)])
+    e = np.array([np.cos(theta0), np.sin(theta0)])
+    q0 = np.empty(9 * N)
+    for i in range(N):  # left rail, right rail, rung
+        q0[9 * i : 9 * i + 6] = [*((i + 0.5) * L * e), theta0, *((i + 0.5) * L * e + (W, 0)), theta0]
+        q0[9 * i + 6 : 9 * i + 9] = [*((i + 1) * L * e + (0.5 * W, 0)), 0.0]
+    return Scene(
+        name="planar-ladder",
+        model=model,
+        q0=q0,
+        v0=np.zeros(9 * N),
+        lam0=None,
+        t_end=float(t_end),
+        exact=None,
+        description=f"ladder of {N} parallelogram four-bars in maximal coordinates ({9 * N} coordinates, {8 * N} rows)",
+        params=dict(N=N, m=m, L=L, W=W, g=g, theta0=theta0, t_end=t_end),
+    )
+
+
+def ladder_pins(level: int, L: float, W: float) -> list[Holonomic]:
+    """A level's four pins: each rail's top to the rail above (the ground at ``(0, 0)`` and ``(W, 0)`` for the
+    first), the rung's ends to the rails' bottoms. Bars ``3i, 3i + 1, 3i + 2``: left rail, right rail, rung."""
+    left, right, rung = 3 * level, 3 * level + 1, 3 * level + 2
+    above: list[Any] = [(left - 3, +1, L), (right - 3, +1, L)] if level else [(0.0, 0.0), (W, 0.0)]
+    n = level + 1
+    return [
+        pin(f"left-{n}", (left, -1, L), above[0]),
+        pin(f"right-{n}", (right, -1, L), above[1]),
+        pin(f"rung-{n} left", (rung, -1, W), (left, +1, L)),
+        pin(f"rung-{n} right", (rung, +1, W), (right, +1, L)),
+    ]
