@@ -11,7 +11,9 @@ Per ``N``, for ``solver="direct"`` and ``solver="qp"`` (``--solvers``):
 - **build s** — constructing the model (``gp.scenes.get("planar-chain", N=N)``);
 - **first s** — the first ``gp.simulate(..., method="rk4-compiled", dt=1e-3)`` of 1000 steps: it builds and
   compiles the run's graph;
-- **µs/step** — a second identical run, wall / 1000 (set-up and recording included);
+- **µs/step** — a second identical run, wall / 1000 (set-up and recording of every step included);
+- **step only** — the same run recording its two ends only (``record=1000``), wall / 1000, best of three: the
+  integration itself, what MuJoCo's ``mj_step`` column measures;
 - **model.step µs** — one checked ``model.step`` call (``direct`` route only; ``benchmarks/_timing.py``'s minimum
   over repeats);
 - **peak MB** — the child's peak resident memory (``ru_maxrss``);
@@ -79,22 +81,31 @@ def free_end(q: np.ndarray, L: float) -> np.ndarray:
     return np.array([x + 0.5 * L * math.cos(theta), z + 0.5 * L * math.sin(theta)])
 
 
-def gausspp_child(N: int, solver: str, mechanism: str) -> dict[str, Any]:
-    """Build, first run, second run, one ``model.step`` (direct), violation and the free end at ``T``."""
+def gausspp_child(N: int, solver: str, mechanism: str, route: str) -> dict[str, Any]:
+    """Build, first run, second run, a run recording its ends only, one ``model.step`` (direct), violation and
+    the free end at ``T``; the step's ``route`` ("auto", "dense" or "sparse")."""
     import gausspp as gp
 
     name, params = MECHANISMS[mechanism]
-    build, scene = timed(lambda: gp.scenes.get(name, N=N, **params))
-    model, q0, v0 = scene.model, scene.q0, scene.v0
 
-    def run() -> Any:
-        return gp.simulate(model, q0, v0, CHAIN["t_end"], dt=DT, method="rk4-compiled", solver=solver)
+    def build_model() -> Any:
+        scene = gp.scenes.get(name, N=N, **params)
+        m = scene.model
+        return scene, gp.Model(m.mechanism, list(m.constraints), route=route) if route != "auto" else m
+
+    build, (scene, model) = timed(build_model)
+    q0, v0 = scene.q0, scene.v0
+
+    def run(record: int = 1) -> Any:
+        return gp.simulate(model, q0, v0, CHAIN["t_end"], dt=DT, method="rk4-compiled", solver=solver, record=record)
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         first, _ = timed(run)
         second, traj = timed(run)
-        out = dict(build_s=build, first_s=first, per_step_us=second / STEPS * 1e6)
+        ends = min(timed(lambda: run(STEPS))[0] for _ in range(3))
+        out = dict(build_s=build, first_s=first, per_step_us=second / STEPS * 1e6, step_only_us=ends / STEPS * 1e6)
+        out["route"] = traj.route
         if solver == "direct":
             lam = np.zeros(model.n_lam)
             out["step_us"] = best_us(lambda: model.step(0.0, q0, v0, lam, solver="direct"), 0.2, 3)
@@ -186,11 +197,11 @@ def mujoco_child(N: int) -> dict[str, Any]:
     return out
 
 
-def child(route: str, N: int, memory_gb: float, mechanism: str) -> None:
+def child(route: str, N: int, memory_gb: float, mechanism: str, step_route: str = "auto") -> None:
     """Run one route at one ``N`` and print its figures as one JSON line."""
     limit = int(memory_gb * 2**30)
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-    out = mujoco_child(N) if route == "mujoco" else gausspp_child(N, route, mechanism)
+    out = mujoco_child(N) if route == "mujoco" else gausspp_child(N, route, mechanism, step_route)
     out["peak_mb"] = peak_mb()
     print(json.dumps(out))
 
@@ -201,7 +212,7 @@ def child(route: str, N: int, memory_gb: float, mechanism: str) -> None:
 def spawn(route: str, N: int, args: argparse.Namespace) -> dict[str, Any]:
     """One child; ``{"status": "over budget" | "out of memory" | "failed: …"}`` when it gives no figures."""
     command = [sys.executable, __file__, "--child", route, str(N), "--memory", str(args.memory)]
-    command += ["--mechanism", args.mechanism]
+    command += ["--mechanism", args.mechanism, "--route", args.route]
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=args.budget)
     except subprocess.TimeoutExpired:
@@ -261,11 +272,13 @@ COLUMNS = [  # (header, route, key, format, width)
     ("build s", "direct", "build_s", ".3f", 8),
     ("first s", "direct", "first_s", ".2f", 8),
     ("direct µs/step", "direct", "per_step_us", ".1f", 14),
+    ("direct step only", "direct", "step_only_us", ".1f", 16),
     ("model.step µs", "direct", "step_us", ".1f", 13),
     ("peak MB", "direct", "peak_mb", ".0f", 8),
     ("violation", "direct", "violation", ".0e", 9),
     ("qp first s", "qp", "first_s", ".2f", 10),
     ("qp µs/step", "qp", "per_step_us", ".1f", 12),
+    ("qp step only", "qp", "step_only_us", ".1f", 12),
     ("qp peak MB", "qp", "peak_mb", ".0f", 10),
     ("MuJoCo max µs", "mujoco", "maximal_us", ".1f", 13),
     ("MuJoCo gap", "mujoco", "maximal_violation", ".0e", 10),
@@ -297,7 +310,9 @@ def exponent(results: dict[int, dict[str, Any]], key: str) -> tuple[float, int]:
 
 SERIES = [  # (label, route, key): the fitted and plotted series
     ("gausspp direct per step", "direct", "per_step_us"),
+    ("gausspp direct step only", "direct", "step_only_us"),
     ("gausspp qp per step", "qp", "per_step_us"),
+    ("gausspp qp step only", "qp", "step_only_us"),
     ("gausspp model.step (direct)", "direct", "step_us"),
     ("gausspp first call (compile)", "direct", "first_s"),
     ("MuJoCo maximal chain per step", "mujoco", "maximal_us"),
@@ -345,10 +360,13 @@ def main() -> None:
     parser.add_argument("--solvers", default="direct,qp", help="gausspp step solvers, comma-separated")
     parser.add_argument("--figure", metavar="PATH", help="per-step time against N, log–log (needs matplotlib)")
     parser.add_argument("--mechanism", choices=list(MECHANISMS), default="chain", help="default: chain")
+    parser.add_argument(
+        "--route", choices=["auto", "dense", "sparse"], default="auto", help="the step's route (default auto)"
+    )
     parser.add_argument("--child", nargs=2, metavar=("ROUTE", "N"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        child(args.child[0], int(args.child[1]), args.memory, args.mechanism)
+        child(args.child[0], int(args.child[1]), args.memory, args.mechanism, args.route)
         return
     routes = [s.strip() for s in args.solvers.split(",") if s.strip()]
     try:

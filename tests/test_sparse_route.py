@@ -120,3 +120,25 @@ def test_the_sparse_step_through_model_step_and_the_hot_path() -> None:
         reference = with_route(model, "dense").step(0.0, q, v, solver=solver)
         assert np.allclose(result.a, reference.a, rtol=1e-10, atol=1e-10 * np.abs(reference.free_acceleration).max())
         assert result.margin == pytest.approx(reference.margin, rel=1e-10)
+
+
+def test_margins_of_large_banded_symmetric_S_match_the_svd() -> None:
+    """The recorded margin of a long chain comes from the band of S (O(k b²)); it is the SVD's smallest value."""
+    from gausspp.step.realizability import BANDED_FROM_ROWS, stacked_margins
+
+    scene = chain(24)  # 48 rows ≥ BANDED_FROM_ROWS
+    model = scene.model
+    assert model.k >= BANDED_FROM_ROWS
+    traj = gp.simulate(model, scene.q0, scene.v0, 0.2, dt=1e-3, method="rk4", solver="direct", record=40)
+    S = np.stack(
+        [
+            model.kernel("direct")(t, q, v, np.zeros(0), np.zeros(2))["S_norm"].copy()
+            for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)
+        ]
+    )
+    reference = np.linalg.svd(S, compute_uv=False)[:, -1]
+    got = stacked_margins(S, model.k, model.m)
+    eps = np.finfo(float).eps
+    assert np.all(np.abs(got - reference) <= 50 * model.k * eps)
+    assert np.allclose(traj.margin, reference, rtol=0, atol=50 * model.k * eps)
+    assert not np.all(np.abs(got * (1 + 1e-6) - reference) <= 50 * model.k * eps)  # a wrong margin would show

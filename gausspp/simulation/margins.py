@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import GaussppError, IntegrationError, NonFiniteError, RealizabilityError
 from ..model.model import Model
 from ..step.outcome import Where, to_result
+from ..step.realizability import is_symmetric
 from .rhs import AnyRightHandSide, GeneralRightHandSide
 
 #: A sampled margin below this is "small": worth a look between samples, and worth naming in a failure.
@@ -42,7 +43,8 @@ def audit(
     n, notes = t.size, list[str]()
     if not rhs.margin_checked:  # redundant rows: the margin is 0 by design and says nothing
         return n, failure, notes
-    if replaceable(failure) and n > 1 and model.m == model.k:
+    if replaceable(failure) and n > 1 and model.m == model.k and not is_symmetric(S):
+        # (a symmetric S is J A⁻¹ Jᵀ: positive semidefinite, det S ≥ 0 — a lost margin shows as a dip to zero)
         found = _sign_change(model, t, S)
         if found is not None:
             n, failure = found

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import casadi as ca
 import numpy as np
+from scipy.linalg import eigvals_banded
 
 #: Above this many constraint rows :func:`margin_bound` is ``+inf`` (it needs a symbolic k × k inverse):
 #: the compiled lane then checks the margin at the recorded samples only.
@@ -100,12 +101,46 @@ def stacked_margins(S_norm: np.ndarray, k: int, m: int) -> np.ndarray:
     out = np.full(n, np.nan)  # NaN in, NaN out (as margin_of): the SVD is not even tried on those
     finite = np.isfinite(S_norm).all(axis=(1, 2))
     S = S_norm[finite]
-    if k == m and np.all(np.abs(S - S.transpose(0, 2, 1)) <= 1e-13 * np.abs(S).max(initial=0.0)):
+    if k == m and is_symmetric(S):
         # symmetric (ideal constraints: S = J A⁻¹ Jᵀ, rows and columns normalized alike): the singular values
-        # are the eigenvalues' magnitudes, and the symmetric eigensolver is several times faster than the SVD
-        out[finite] = np.abs(np.linalg.eigvalsh(S)).min(axis=1)
+        # are the eigenvalues' magnitudes, and a symmetric eigensolver is several times faster than the SVD
+        out[finite] = _symmetric_margins(S)
     else:
         out[finite] = np.linalg.svd(S, compute_uv=False)[:, -1]
+    return out
+
+
+def is_symmetric(S: np.ndarray) -> bool:
+    """Whether each of the stacked ``S`` is symmetric (to round-off of its largest entry); checked a few samples
+    at a time (no copy of the whole stack), stopping at the first that is not."""
+    size = max(S.max(initial=0.0), -S.min(initial=0.0))
+    for start in range(0, S.shape[0], 16):
+        block = S[start : start + 16]
+        if np.abs(block - block.transpose(0, 2, 1)).max(initial=0.0) > 1e-13 * size:
+            return False
+    return True
+
+
+#: From this many rows on, a banded symmetric ``S`` has its smallest eigenvalue found in its band (O(k b²)).
+BANDED_FROM_ROWS = 32
+
+
+def _symmetric_margins(S: np.ndarray) -> np.ndarray:
+    """The smallest eigenvalue magnitude of each stacked symmetric ``S``: of its band alone when it is banded and
+    large (a chain's ``J A⁻¹ Jᵀ``: bandwidth 3 whatever its size), by the full symmetric eigensolver otherwise."""
+    n, k, _ = S.shape
+    offsets = np.abs(np.subtract.outer(np.arange(k), np.arange(k)))
+    width = int(offsets[np.any(S != 0, axis=0)].max(initial=0))
+    if k < BANDED_FROM_ROWS or width > k // 4:
+        return np.abs(np.linalg.eigvalsh(S)).min(axis=1)
+    band = np.zeros((n, width + 1, k))
+    for d in range(width + 1):  # lower form: band[d, j] = S[j + d, j]
+        band[:, d, : k - d] = np.diagonal(S, offset=-d, axis1=1, axis2=2)
+    out = np.empty(n)
+    for i in range(n):
+        lowest = eigvals_banded(band[i], lower=True, select="i", select_range=(0, 0))[0]
+        # positive semidefinite (as J A⁻¹ Jᵀ is): the lowest eigenvalue is the smallest magnitude
+        out[i] = abs(lowest) if lowest > -1e-12 else np.abs(np.linalg.eigvalsh(S[i])).min()
     return out
 
 
