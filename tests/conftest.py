@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -9,6 +10,16 @@ from typing import NamedTuple
 
 import numpy as np
 import pytest
+
+
+@pytest.fixture(scope="session", autouse=True)
+def private_disk_cache(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Compiled functions go to a directory of this test session (gausspp.disk_cache), never the user's cache."""
+    from gausspp import disk_cache
+
+    folder = tmp_path_factory.mktemp("gausspp-cache")
+    os.environ[disk_cache.ENV] = str(folder)  # child processes (the demo's workers, the CLI) inherit it
+    return folder
 
 
 @pytest.fixture

@@ -142,3 +142,15 @@ def test_margins_of_large_banded_symmetric_S_match_the_svd() -> None:
     assert np.all(np.abs(got - reference) <= 50 * model.k * eps)
     assert np.allclose(traj.margin, reference, rtol=0, atol=50 * model.k * eps)
     assert not np.all(np.abs(got * (1 + 1e-6) - reference) <= 50 * model.k * eps)  # a wrong margin would show
+
+
+def test_all_cosines_of_a_long_chain_step_are_the_svd_of_its_S() -> None:
+    scene = chain(20)  # 40 rows: the band's eigenvalues, not a dense SVD
+    model = scene.model
+    result = model.step(0.0, scene.q0, scene.v0, solver="direct")
+    S = model.kernel("direct")(0.0, scene.q0, scene.v0, np.zeros(0), np.zeros(2))["S_norm"]
+    reference = np.linalg.svd(S, compute_uv=False)
+    tolerance = 50 * model.k * np.finfo(float).eps * reference[0]
+    assert result.cosines.shape == reference.shape and np.all(np.abs(result.cosines - reference) <= tolerance)
+    assert result.margin == result.cosines[-1]
+    assert not np.all(np.abs(np.sort(result.cosines) - reference) <= tolerance)  # the order (largest first) matters

@@ -7,11 +7,13 @@ Both return the states on their grid; recording is the caller's job.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
+from ..disk_cache import cached_function
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError, RealizabilityError
 from ..model.model import Model
 from ..step import realizability
@@ -187,8 +189,11 @@ def _compiled_run(
         assert meth.tableau is not None
         return rk_step_function(model, rhs_function(model, solver, backend, with_solution=True), meth.tableau, stab)
 
-    step = workspace(model).get(("compiled-step", *key), build_step)
-    run = workspace(model).get(("compiled-run", *key, n_steps), lambda: step.mapaccum("run", n_steps))
+    def cached(what: tuple[Any, ...], build: Callable[[], ca.Function]) -> ca.Function:  # memory, then disk
+        return workspace(model).get(what, lambda: cached_function(model, what, build))
+
+    step = cached(("compiled-step", *key), build_step)
+    run = cached(("compiled-run", *key, n_steps), lambda: step.mapaccum("run", n_steps))
     return step, run
 
 

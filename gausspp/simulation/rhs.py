@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..disk_cache import cached_function
 from ..errors import NonFiniteError
 from ..model.model import Model
 from ..step import qp
@@ -105,9 +106,9 @@ class RightHandSide(_StateDerivative):
             return {}, np.zeros(0), 0
         replay = None if solutions is None or kernel.qp_parts is None else np.isfinite(solutions).all(axis=1)
         if replay is None or not replay.any():
-            out, n = _mapped(_mapped_step(kernel), t, y, self._slices)
+            out, n = _mapped(_mapped_step(self.model, kernel, self.solver), t, y, self._slices)
         else:
-            out, n = _replayed(kernel, t, y, self._slices, solutions, replay)  # type: ignore[arg-type]
+            out, n = _replayed(self.model, kernel, t, y, self._slices, solutions, replay)  # type: ignore[arg-type]
         self.evaluations += n
         m = self.model
         margin = stacked_margins(out["S_norm"][:n], m.k, m.m)
@@ -121,11 +122,20 @@ class RightHandSide(_StateDerivative):
 CHUNK = 128
 
 
-def _mapped_step(kernel: CompiledKernel) -> Bound:
-    return workspace(kernel).get(("mapped step", CHUNK), lambda: Bound(kernel.function.map(CHUNK)))
+def _mapped_step(model: Model, kernel: CompiledKernel, solver: str) -> Bound:
+    """The step mapped over :data:`CHUNK` samples (kept beside the kernel, and on disk for a direct step)."""
+
+    def build() -> Bound:
+        if kernel.qp_parts is not None:
+            return Bound(kernel.function.map(CHUNK))
+        what = ("mapped step", CHUNK, solver, kernel.function.name(), kernel.function.n_instructions())
+        return Bound(cached_function(model, what, lambda: kernel.function.map(CHUNK)))
+
+    return workspace(kernel).get(("mapped step", CHUNK), build)
 
 
 def _replayed(
+    model: Model,
     kernel: CompiledKernel,
     t: np.ndarray,
     y: np.ndarray,
@@ -141,7 +151,7 @@ def _replayed(
     out = _mapped(replayed, t[replay], y[replay], slices, solutions[replay])[0]  # SX: never refuses
     if again.size == 0:
         return out, t.size
-    solved, n_solved = _mapped(_mapped_step(kernel), t[again], y[again], slices)
+    solved, n_solved = _mapped(_mapped_step(model, kernel, "qp"), t[again], y[again], slices)
     merged = {name: np.empty((t.size, *value.shape[1:])) for name, value in out.items()}
     for name, value in merged.items():
         value[replay], value[again] = out[name], solved[name]

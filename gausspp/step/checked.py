@@ -9,8 +9,10 @@ bounded actuators), and when the compiled QP meets rows that are redundant on th
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 
+from ..disk_cache import cached_function
 from ..errors import GaussppError, InputError, QPSolveError, RealizabilityError, UnknownNameError
 from ..workspace import workspace
 from . import qp
@@ -51,7 +53,12 @@ def kernel_for(model: StepModel, solver: str, backend: str | qp.QPBackend | None
     ws = workspace(model)
 
     def build() -> Kernel:
-        return build_kernel("step", model.inputs, model.expressions, solver, chosen, refine, model.route)
+        def compile_step() -> Kernel:
+            return build_kernel("step", model.inputs, model.expressions, solver, chosen, refine, model.route)
+
+        if solver == "direct":  # one function, kept on disk between processes (a QP's is rebuilt with its parts)
+            return CompiledKernel(cached_function(model, ("direct kernel", refine), lambda: _function(compile_step())))
+        return compile_step()
 
     kernel = ws.get(key, build)
     if chosen is not None and getattr(kernel, "backend", chosen) is not chosen:  # a backend object given anew
@@ -76,6 +83,11 @@ def checked_call(model: StepModel, solver: str, backend: object, refine: bool) -
         return CheckedCall(kernel, model.k, model.m, model.lam0, name, model.margin_warn)
 
     return workspace(model).get(("checked call", solver, backend, refine), build)
+
+
+def _function(kernel: Kernel) -> ca.Function:
+    assert isinstance(kernel, CompiledKernel)  # the direct step is always one compiled function
+    return kernel.function
 
 
 def step_problem(model: StepModel, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> StepProblem:

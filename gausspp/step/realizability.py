@@ -79,7 +79,12 @@ def singular_values(S_norm: np.ndarray, k: int, m: int) -> np.ndarray:
     if k == 1:
         row = S_norm.ravel()
         return np.array([np.sqrt(float(row @ row))])
-    return np.linalg.svd(S_norm.reshape(k, m, order="F"), compute_uv=False)
+    S = S_norm.reshape(k, m, order="F")
+    if k == m and k >= BANDED_FROM_ROWS and np.isfinite(S).all() and is_symmetric(S[None]):
+        band = _band(S[None])
+        if band is not None:  # every eigenvalue of the band (O(k² b)), not an SVD of the whole (O(k³))
+            return np.sort(np.abs(eigvals_banded(band[0], lower=True)))[::-1]
+    return np.linalg.svd(S, compute_uv=False)
 
 
 def step_margin(S_norm: np.ndarray, k: int, m: int) -> float:
@@ -125,24 +130,32 @@ def is_symmetric(S: np.ndarray) -> bool:
 BANDED_FROM_ROWS = 32
 
 
-def _symmetric_margins(S: np.ndarray) -> np.ndarray:
-    """The smallest eigenvalue magnitude of each stacked symmetric ``S``: of its band alone when it is banded and
-    large (a chain's ``J A⁻¹ Jᵀ``: bandwidth 3 whatever its size), by the full symmetric eigensolver otherwise."""
+def _band(S: np.ndarray) -> np.ndarray | None:
+    """The stacked symmetric ``S`` in LAPACK's lower band form (``band[:, d, j] = S[:, j + d, j]``), or ``None``
+    unless they are large and banded (a bandwidth of at most a quarter of their size)."""
     n, k, _ = S.shape
     offsets = np.abs(np.subtract.outer(np.arange(k), np.arange(k)))
     width = int(offsets[np.any(S != 0, axis=0)].max(initial=0))
     if k < BANDED_FROM_ROWS or width > k // 4:
-        return np.abs(np.linalg.eigvalsh(S)).min(axis=1)
+        return None
     band = np.zeros((n, width + 1, k))
-    for d in range(width + 1):  # lower form: band[d, j] = S[j + d, j]
+    for d in range(width + 1):
         band[:, d, : k - d] = np.diagonal(S, offset=-d, axis1=1, axis2=2)
-    out = np.empty(n)
-    for i in range(n):
+    return band
+
+
+def _symmetric_margins(S: np.ndarray) -> np.ndarray:
+    """The smallest eigenvalue magnitude of each stacked symmetric ``S``: of its band alone when it is banded and
+    large (a chain's ``J A⁻¹ Jᵀ``: bandwidth 3 whatever its size), by the full symmetric eigensolver otherwise."""
+    band = _band(S)
+    if band is None:
+        return np.abs(np.linalg.eigvalsh(S)).min(axis=1)
+    out = np.empty(S.shape[0])
+    for i in range(S.shape[0]):
         lowest = eigvals_banded(band[i], lower=True, select="i", select_range=(0, 0))[0]
         # positive semidefinite (as J A⁻¹ Jᵀ is): the lowest eigenvalue is the smallest magnitude
         out[i] = abs(lowest) if lowest > -1e-12 else np.abs(np.linalg.eigvalsh(S[i])).min()
     return out
-
 
 def margin_bound(S: ca.SX, k: int, m: int) -> ca.SX:
     """In a casadi graph: ``b`` with ``b ≤ σ_min(S) ≤ √k · b``, the margin within a factor √k.
