@@ -26,6 +26,9 @@ at the pins with ``benchmarks/peers.py``'s stiffest settings — and of MuJoCo's
 reduced coordinates, no constraint). ``tip`` is the largest distance, at ``T``, of the chain's free end from
 the hinge chain's (gausspp direct and MuJoCo maximal): both integrate the same motion.
 
+``--codegen`` runs the compiled lane's step as C (``gp.Model(..., codegen=True)``, :mod:`gausspp.c_code`): the
+first call then includes the C compiler's time, and the library is kept on disk.
+
 ``--mechanism ladder`` times the closed-loop ``planar-ladder`` scene instead (``N`` parallelogram four-bars stacked:
 two rails and a rung per level, ``9N`` coordinates, ``8N`` rows; gausspp only).
 
@@ -81,7 +84,7 @@ def free_end(q: np.ndarray, L: float) -> np.ndarray:
     return np.array([x + 0.5 * L * math.cos(theta), z + 0.5 * L * math.sin(theta)])
 
 
-def gausspp_child(N: int, solver: str, mechanism: str, route: str) -> dict[str, Any]:
+def gausspp_child(N: int, solver: str, mechanism: str, route: str, codegen: bool = False) -> dict[str, Any]:
     """Build, first run, second run, a run recording its ends only, one ``model.step`` (direct), violation and
     the free end at ``T``; the step's ``route`` ("auto", "dense" or "sparse")."""
     import gausspp as gp
@@ -91,7 +94,9 @@ def gausspp_child(N: int, solver: str, mechanism: str, route: str) -> dict[str, 
     def build_model() -> Any:
         scene = gp.scenes.get(name, N=N, **params)
         m = scene.model
-        return scene, gp.Model(m.mechanism, list(m.constraints), route=route) if route != "auto" else m
+        if route == "auto" and not codegen:
+            return scene, m
+        return scene, gp.Model(m.mechanism, list(m.constraints), route=route, codegen=codegen)
 
     build, (scene, model) = timed(build_model)
     q0, v0 = scene.q0, scene.v0
@@ -197,11 +202,13 @@ def mujoco_child(N: int) -> dict[str, Any]:
     return out
 
 
-def child(route: str, N: int, memory_gb: float, mechanism: str, step_route: str = "auto") -> None:
+def child(
+    route: str, N: int, memory_gb: float, mechanism: str, step_route: str = "auto", codegen: bool = False
+) -> None:
     """Run one route at one ``N`` and print its figures as one JSON line."""
     limit = int(memory_gb * 2**30)
     resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-    out = mujoco_child(N) if route == "mujoco" else gausspp_child(N, route, mechanism, step_route)
+    out = mujoco_child(N) if route == "mujoco" else gausspp_child(N, route, mechanism, step_route, codegen)
     out["peak_mb"] = peak_mb()
     print(json.dumps(out))
 
@@ -212,7 +219,7 @@ def child(route: str, N: int, memory_gb: float, mechanism: str, step_route: str 
 def spawn(route: str, N: int, args: argparse.Namespace) -> dict[str, Any]:
     """One child; ``{"status": "over budget" | "out of memory" | "failed: …"}`` when it gives no figures."""
     command = [sys.executable, __file__, "--child", route, str(N), "--memory", str(args.memory)]
-    command += ["--mechanism", args.mechanism, "--route", args.route]
+    command += ["--mechanism", args.mechanism, "--route", args.route] + (["--codegen"] if args.codegen else [])
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=args.budget)
     except subprocess.TimeoutExpired:
@@ -363,10 +370,11 @@ def main() -> None:
     parser.add_argument(
         "--route", choices=["auto", "dense", "sparse"], default="auto", help="the step's route (default auto)"
     )
+    parser.add_argument("--codegen", action="store_true", help="the compiled lane's step as C (Model(codegen=True))")
     parser.add_argument("--child", nargs=2, metavar=("ROUTE", "N"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
-        child(args.child[0], int(args.child[1]), args.memory, args.mechanism, args.route)
+        child(args.child[0], int(args.child[1]), args.memory, args.mechanism, args.route, args.codegen)
         return
     routes = [s.strip() for s in args.solvers.split(",") if s.strip()]
     try:

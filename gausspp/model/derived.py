@@ -28,6 +28,7 @@ def _like(model: Model, constraints: list[Any]) -> Model:
         margin_error=model.margin_error,
         refine=model.refine,
         route=model.route_requested,
+        codegen=model.codegen,
         _allow_free=True,
     )
 

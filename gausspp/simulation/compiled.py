@@ -13,6 +13,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..c_code import c_function
 from ..disk_cache import cached_function
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError, RealizabilityError
 from ..model.model import Model
@@ -193,6 +194,9 @@ def _compiled_run(
         return workspace(model).get(what, lambda: cached_function(model, what, build))
 
     step = cached(("compiled-step", *key), build_step)
+    if model.codegen:  # the step as C where a compiler is (c_code), the run around it rebuilt in each process
+        c_step = workspace(model).get(("compiled-step-c", *key), lambda: c_function(step) or step)
+        return c_step, workspace(model).get(("compiled-run-c", *key, n_steps), lambda: c_step.mapaccum("run", n_steps))
     run = cached(("compiled-run", *key, n_steps), lambda: step.mapaccum("run", n_steps))
     return step, run
 

@@ -157,6 +157,7 @@ def _symmetric_margins(S: np.ndarray) -> np.ndarray:
         out[i] = abs(lowest) if lowest > -1e-12 else np.abs(np.linalg.eigvalsh(S[i])).min()
     return out
 
+
 def margin_bound(S: ca.SX, k: int, m: int) -> ca.SX:
     """In a casadi graph: ``b`` with ``b ≤ σ_min(S) ≤ √k · b``, the margin within a factor √k.
 
