@@ -26,7 +26,6 @@ import argparse
 import os
 
 import numpy as np
-
 from gausspp.sweeps import sweep
 
 M, IC, L, G = 1.0, 0.01, 1.0, 9.81  # the pendulum scene's defaults
