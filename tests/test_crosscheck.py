@@ -92,6 +92,7 @@ def test_a_wrong_direct_formula_is_caught(monkeypatch: pytest.MonkeyPatch) -> No
     assert gp.crosscheck(_random_model(n, k, m, seed), t, q, v).ok
 
     monkeypatch.setattr(kernel_module, "direct_reaction", lambda red: ca.solve(red.S_hat.T, red.rhs_hat))
+    monkeypatch.setenv("GAUSSPP_CACHE_DIR", "off")  # not the right formula from the disk cache: compile the double
     wrong = gp.crosscheck(_random_model(n, k, m, seed), t, q, v)  # a fresh model compiles the wrong formula
     assert not wrong.ok
     assert wrong.distances["direct"] > 1e-3 and wrong.distances["qp:default"] <= 1e-9
