@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..model.model import Model
-from .demo import Backends, GeneralRow, SceneRow, StepRow
+from .demo import GENERAL_RTOL, Backends, GeneralRow, SceneRow, StepRow
 
 
 def one_line(text: object) -> str:
@@ -101,7 +101,7 @@ def general_lines(backends: Backends, rows: Iterable[GeneralRow]) -> Iterator[st
     compared = (
         f"{first}, compared with {second}" if second else f"{first} only; daqp not installed — `pip install daqp`"
     )
-    yield f"\nBeyond closed forms — the general Gauss QP ({compared}), DOP853 rtol 1e-11:\n"
+    yield f"\nBeyond closed forms — the general Gauss QP ({compared}), DOP853 rtol {GENERAL_RTOL:g}:\n"
     yield from _header(
         f"{'scene':19s} {'what':28s} {'T':>5s} {'events':>6s} {'saturated':>9s} {versus:>12s} "
         f"{'|Φ|,|g| max':>11s} {'energy bal.':>11s} {'vs exact':>9s} {'run ms':>7s}"
