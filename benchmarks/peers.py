@@ -42,6 +42,7 @@ from types import ModuleType
 from typing import Any
 
 import numpy as np
+from _figures import headless_pyplot
 from _timing import best_us
 
 import gausspp as gp
@@ -273,13 +274,8 @@ def print_ratios(rows: list[Row]) -> None:
 
 def figure(rows: list[Row], path: str) -> None:
     """Error at T against wall time, one point per run (matplotlib, optional)."""
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib is not installed: no figure")
+    plt = headless_pyplot()
+    if plt is None:
         return
     fig, ax = plt.subplots(figsize=(7, 5))
     for r in rows:
@@ -287,7 +283,7 @@ def figure(rows: list[Row], path: str) -> None:
             marker = "o" if r.what.startswith("gausspp") else ("s" if r.what.startswith("MuJoCo") else "^")
             ax.loglog(r.wall_ms, max(r.error, 1e-16), marker, label=r.what)
     ax.set(xlabel="wall time of the whole run [ms]", ylabel="error at T", title=f"P2 pendulum, T = 2 s, dt = {DT:g}")
-    ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())  # decade labels only
+    ax.xaxis.set_minor_formatter(plt.NullFormatter())  # decade labels only
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7)
     fig.tight_layout()
