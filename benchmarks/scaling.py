@@ -51,6 +51,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from _figures import headless_pyplot
 from _timing import best_us
 
 NS = (1, 2, 4, 8, 16, 32, 64, 128)
@@ -337,13 +338,8 @@ def print_exponents(results: dict[str, dict[int, dict[str, Any]]]) -> None:
 
 def figure(results: dict[str, dict[int, dict[str, Any]]], path: str, title: str) -> None:
     """Per-step time against N, log–log (matplotlib, optional)."""
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        print("matplotlib is not installed: no figure")
+    plt = headless_pyplot()
+    if plt is None:
         return
     fig, ax = plt.subplots(figsize=(7, 5))
     for label, route, key in SERIES:
