@@ -1,0 +1,191 @@
+"""How the actuators reach a servo-constraint: relative degrees, dynamic extension, Blajer's kind, the index.
+
+The one-step formula needs ``S = J A⁻¹ D`` nonsingular (condition (12)): every actuator acts on the constrained
+quantities' *accelerations*. Many machines are not like that. An overhead crane's trolley force reaches the
+payload only through the rope's swing — in the payload's fourth derivative — and ``S`` is singular at every
+state, although the motion along a prescribed path exists and is unique. This module measures the reach.
+
+**Relative degree.** With the constraint's value ``y = g(q, t)`` (a holonomic row; ``Φ(q, v, t)`` for a row
+given on velocities) and the dynamics ``q̇ = K(q, v, t)``, ``A v̇ = f + r₀ + D u``, differentiate along the
+motion, ``y⁽ʲ⁾ = L y⁽ʲ⁻¹⁾`` with ``L h = ∂h/∂q q̇ + ∂h/∂v v̇ + ∂h/∂t``. Row ``i``'s relative degree ``rᵢ`` is
+the first ``j`` at which an actuator force ``u`` appears: ``∂yᵢ⁽ʲ⁾/∂u ≠ 0``. (A dependence that vanishes at
+the state and at nearby states is taken as identically zero — the tangential structure — and dropped before the
+next derivative.) For a realizable servo every ``rᵢ = 2`` and the matrix of the ``∂yᵢ⁽ʳⁱ⁾/∂u`` is ``S``.
+
+**Dynamic extension.** When that *decoupling matrix* ``B`` is singular (the crane: the rope tension reaches both
+payload coordinates at ``r = 2``, the trolley force neither), the actuators that appear are delayed by an
+integrator — their force becomes a state, its derivative the new input — and the degrees are measured again
+(the simplest form of Descusse and Moog's extension algorithm). The crane needs two integrators on the
+tension; then ``r = (4, 4)`` and ``B`` is nonsingular.
+
+**Index and kind.** The servo DAE's differentiation index is ``max rᵢ + 1`` after extension (``2n + 1`` for a
+chain of ``n`` masses driven at one end and prescribed at the other). Blajer's kinds, from the cosines of
+``S`` (:mod:`gausspp.step.realizability`): *orthogonal* (all 1: the actuators push along the constraint
+normals, an ideal constraint), *oblique* (all nonzero), *tangential* (all zero: no actuator acts on the
+constrained accelerations) and *mixed* (some zero).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from ..errors import InputError
+from .protocol import StepModel
+from .realizability import cosines
+
+#: Dependence of a derivative on the inputs below this (relative to its dependence on the state) counts as none.
+REACH_TOL = 1e-9
+
+#: A cosine below this counts as zero when the kind is named.
+KIND_TOL = 1e-9
+
+
+@dataclass
+class Extended:
+    """The motion's symbols and derivatives with some actuators delayed by integrators.
+
+    ``z = (q, v, ξ)`` with ``ξ`` the chains ``(uₐ, u̇ₐ, …)`` of the extended actuators; ``w`` the inputs: the
+    forces of the others and the top derivative of each chain; ``zdot`` the motion ``ż(z, w, t)``."""
+
+    t: ca.SX
+    z: ca.SX
+    w: ca.SX
+    zdot: ca.SX
+    force: ca.SX  # the m actuator forces in terms of z and w
+    chains: tuple[int, ...]  # integrators per actuator
+
+
+def extended_motion(model: StepModel, chains: tuple[int, ...]) -> Extended:
+    """The model's motion with ``chains[a]`` integrators in front of actuator ``a`` (0: a force as input)."""
+    p = model.expressions
+    t, q, v, lam, stab = model.inputs
+    if lam.numel() or not model.m:
+        raise InputError("the servo route needs actuator forces and no realization that carries λ as a state")
+    xi = [ca.SX.sym(f"xi{a}", c) for a, c in enumerate(chains)]
+    w = ca.SX.sym("w", len(chains))
+    force = ca.vertcat(*[xi[a][0] if c else w[a] for a, c in enumerate(chains)])
+    rhs = ca.substitute(p.f + p.r0, stab, ca.SX.zeros(stab.shape))
+    D = ca.substitute(p.D, stab, ca.SX.zeros(stab.shape))
+    vdot = ca.solve(p.A, rhs + D @ force)
+    xidot = [ca.vertcat(*[xi[a][j] for j in range(1, c)], w[a]) for a, c in enumerate(chains) if c]
+    qdot = p.qdot if p.qdot is not None else v
+    z = ca.vertcat(q, v, *[x for x in xi if x.numel()])
+    zdot = ca.vertcat(qdot, vdot, *xidot)
+    return Extended(t, z, w, ca.substitute(zdot, stab, ca.SX.zeros(stab.shape)), force, chains)
+
+
+def outputs(model: StepModel) -> ca.SX:
+    """The constrained quantities ``y``: ``g(q, t)`` for holonomic rows, ``Φ(q, v, t)`` for the others."""
+    p = model.expressions
+    g = p.g if p.g is not None else p.Phi
+    rows = [g[i] if i in model.holonomic_rows else p.Phi[i] for i in range(model.k)]
+    stab = model.inputs[4]
+    return ca.substitute(ca.vertcat(*rows), stab, ca.SX.zeros(stab.shape))
+
+
+def lie(h: ca.SX, e: Extended) -> ca.SX:
+    """``dh/dt`` along the extended motion."""
+    return ca.jtimes(h, e.z, e.zdot) + ca.jacobian(h, e.t)
+
+
+@dataclass
+class Reach:
+    """The derivatives of the constrained quantities down to where the inputs appear (see the module docstring)."""
+
+    extended: Extended
+    degrees: tuple[int, ...]  # relative degree of each row
+    derivatives: list[list[ca.SX]]  # derivatives[i][j] = yᵢ⁽ʲ⁾ for j < rᵢ (input-free), and yᵢ⁽ʳⁱ⁾ (affine in w)
+    B: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # ∂y⁽ʳ⁾/∂w at the state
+    unextended: tuple[int, ...] = ()  # the relative degrees before any integrator was added
+
+    @property
+    def index(self) -> int:
+        """The differentiation index of the servo DAE: ``max rᵢ + 1``."""
+        return max(self.degrees) + 1
+
+
+def _states_near(z0: np.ndarray, count: int = 3) -> list[np.ndarray]:
+    """``z0`` and generic states around it: structure (which input reaches which derivative, the rank of ``B``)
+    is a property of the equations, not of one state — a crane at rest with zero tension would hide it."""
+    rng = np.random.default_rng(1989)  # the paper's year: any fixed seed
+    scale = 0.1 * np.maximum(1.0, np.abs(z0))
+    return [z0] + [z0 + scale * rng.standard_normal(z0.size) for _ in range(count)]
+
+
+def _reaches(expr: ca.SX, e: Extended, t0: float, states: list[np.ndarray]) -> np.ndarray:
+    """Which inputs ``expr`` depends on at the states (relative to its dependence on the state)."""
+    grad = ca.Function("grad", [e.t, e.z, e.w], [ca.jacobian(expr, e.w), ca.jacobian(expr, e.z)])
+    hit = np.zeros(e.w.numel(), dtype=bool)
+    for z in states:
+        dw, dz = (np.array(x, dtype=float).ravel() for x in grad(t0, z, np.zeros(e.w.numel())))
+        hit |= np.abs(dw) > REACH_TOL * (1.0 + np.abs(dz).max(initial=0.0))
+    return hit
+
+
+def measure_reach(model: StepModel, t0: float, z0: np.ndarray, chains: tuple[int, ...], max_degree: int) -> Reach:
+    """The relative degrees and derivatives with ``chains`` integrators (``z0``: the extended state)."""
+    e = extended_motion(model, chains)
+    y = outputs(model)
+    states = _states_near(np.asarray(z0, float))
+    degrees, derivatives = [], []
+    for i in range(y.numel()):
+        chain, h = [], y[i]
+        for _ in range(max_degree):
+            chain.append(h)
+            h = lie(h, e)
+            hit = _reaches(h, e, t0, states)
+            if hit.any():
+                break
+            h = ca.substitute(h, e.w, ca.SX.zeros(e.w.shape))  # a vanishing dependence: none at all
+        else:
+            raise InputError(
+                f"no actuator reaches constraint row {model.row_names[i]!r} within {max_degree} derivatives: "
+                "the servo cannot keep it with these actuators"
+            )
+        degrees.append(len(chain))
+        derivatives.append([*chain, h])
+    top = ca.vertcat(*[d[-1] for d in derivatives])
+    B_of = ca.Function("B", [e.t, e.z, e.w], [ca.jacobian(top, e.w)])
+    candidates = [np.array(B_of(t0, z, np.zeros(e.w.numel()))) for z in states]
+    return Reach(e, tuple(degrees), derivatives, max(candidates, key=_conditioning))  # the generic rank
+
+
+def _conditioning(B: np.ndarray) -> float:
+    """``σ_min / σ_max`` of a square ``B`` (0 if it is not square or is zero)."""
+    if B.shape[0] != B.shape[1] or not B.size:
+        return 0.0
+    sv = np.linalg.svd(B, compute_uv=False)
+    return float(sv[-1] / sv[0]) if sv[0] > 0 else 0.0
+
+
+def find_reach(model: StepModel, t0: float, q0: np.ndarray, v0: np.ndarray, max_extensions: int = 8) -> Reach:
+    """The relative degrees, extending the actuators that appear while the decoupling matrix is singular."""
+    n_state = model.nq + model.nv
+    chains = tuple(0 for _ in range(model.m))
+    unextended: tuple[int, ...] = ()
+    for _ in range(max_extensions + 1):
+        xi0 = np.zeros(sum(chains))
+        reach = measure_reach(model, t0, np.concatenate([q0, v0, xi0]), chains, 2 * n_state + 2 * sum(chains) + 2)
+        unextended = unextended or reach.degrees
+        if _conditioning(reach.B) > REACH_TOL:
+            reach.unextended = unextended
+            return reach
+        appear = np.abs(reach.B).max(axis=0) > REACH_TOL * max(np.abs(reach.B).max(), 1.0)
+        if not appear.any():
+            break
+        chains = tuple(c + 1 if hit else c for c, hit in zip(chains, appear, strict=True))
+    raise InputError(
+        "the actuators cannot be decoupled along this constraint (the decoupling matrix stays singular after "
+        f"{max_extensions} integrators): the servo problem has no unique solution with these actuators"
+    )
+
+
+def kind(model: StepModel, A: np.ndarray, J: np.ndarray, D: np.ndarray) -> str:
+    """Blajer's name for the realization: orthogonal, oblique, tangential or mixed (module docstring)."""
+    cos = cosines(A, J, D) if J.size and D.size else np.zeros(0)
+    if cos.size < J.shape[0] or not np.all(cos > KIND_TOL):
+        return "tangential" if not np.any(cos > KIND_TOL) else "mixed"
+    return "orthogonal" if np.all(np.abs(cos - 1.0) <= 1e-9) else "oblique"
