@@ -36,6 +36,8 @@ _MODULES: dict[str, str] = {
     "four-bar-redundant": "four_bar",
     "planar-chain": "planar_chain",
     "planar-ladder": "planar_chain",
+    "overhead-crane": "overhead_crane",
+    "spring-chain-servo": "spring_chain_servo",
 }
 
 #: Scenes whose step is not a square equality system (contacts, bounded or extra actuators, redundant
