@@ -15,7 +15,8 @@ import gausspp as gp
 from gausspp.step import sparse
 
 FIELDS = ("a", "u", "reaction", "compulsion", "S_norm", "residual", "a_free", "qdot", "power_reaction")
-SCENES = [n for n in gp.scenes.names() if not (gp.scenes.get(n).model.contacts or gp.scenes.get(n).model.bounded)]
+ONE_STEP = [n for n in gp.scenes.names() if n not in gp.scenes.names("servo")]  # servo scenes: no one-step route
+SCENES = [n for n in ONE_STEP if not (gp.scenes.get(n).model.contacts or gp.scenes.get(n).model.bounded)]
 
 
 def with_route(model: gp.Model, route: str) -> gp.Model:

@@ -36,24 +36,34 @@ _MODULES: dict[str, str] = {
     "four-bar-redundant": "four_bar",
     "planar-chain": "planar_chain",
     "planar-ladder": "planar_chain",
+    "overhead-crane": "overhead_crane",
+    "spring-chain-servo": "spring_chain_servo",
 }
 
 #: Scenes whose step is not a square equality system (contacts, bounded or extra actuators, redundant
 #: rows): only the general Gauss QP steps them, so studies that compare the direct formula skip them.
 GENERAL = ("block-on-floor", "bouncing-pendulum", "saturated-crane", "two-actuator-servo", "four-bar-redundant")
 
-__all__ = ["GENERAL", "Scene", "describe", "get", "names", "parameters"]
+#: Servo scenes realized tangentially (issue 19): the one-step matrix ``J A⁻¹ Mᵀ`` is singular at every state
+#: (the actuators reach the constraint only in a higher derivative, index > 3), so no one-step route steps them:
+#: studies and tests that step or simulate every scene skip them; the servo route solves them.
+SERVO = ("overhead-crane", "spring-chain-servo")
+
+__all__ = ["GENERAL", "SERVO", "Scene", "describe", "get", "names", "parameters"]
 
 
 def names(kind: str = "all") -> list[str]:
-    """Names of the scenes: ``"all"``, ``"equality"`` (the direct formula applies) or ``"general"``."""
+    """Names of the scenes: ``"all"``, ``"equality"`` (the direct formula applies), ``"general"`` (the general
+    Gauss QP only) or ``"servo"`` (index > 3: neither one-step route applies)."""
     if kind == "all":
         return list(_MODULES)
     if kind == "equality":
-        return [n for n in _MODULES if n not in GENERAL]
+        return [n for n in _MODULES if n not in GENERAL and n not in SERVO]
     if kind == "general":
         return [n for n in _MODULES if n in GENERAL]
-    raise UnknownNameError(f"scene kind {kind!r} is unknown; use 'all', 'equality' or 'general'")
+    if kind == "servo":
+        return [n for n in _MODULES if n in SERVO]
+    raise UnknownNameError(f"scene kind {kind!r} is unknown; use 'all', 'equality', 'general' or 'servo'")
 
 
 def _builder(name: str) -> Callable[..., Scene]:

@@ -38,6 +38,8 @@ class Scene:
         One line for listings.
     params : dict
         The parameters the scene was built with.
+    forces : callable ``t -> (m,) array`` or None
+        The exact actuator forces ``λ(t)`` along :attr:`exact` where they are known (the servo scenes).
     """
 
     name: str
@@ -49,6 +51,7 @@ class Scene:
     exact: Callable[[float], tuple[np.ndarray, np.ndarray]] | None
     description: str
     params: dict[str, Any] = field(default_factory=dict)
+    forces: Callable[[float], np.ndarray] | None = None
 
 
 # -- parameters: every scene's, checked by type in one place ---------------------------------------
