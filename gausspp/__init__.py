@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import sys
 
-from . import plot, scenes
+from . import plot, scenes, servo
 from .errors import (
     GaussppError,
     GaussppWarning,
@@ -34,6 +34,7 @@ from .model.constraints import Constraint, Holonomic, Unilateral
 from .model.mechanism import Lagrangian, MassMatrix, Mechanism, RigidBody
 from .model.model import Model
 from .model.realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
+from .servo import ServoDiagnosis, ServoTrajectory, replay, servo_diagnosis, simulate_servo
 from .simulation import methods
 from .simulation.drift import Baumgarte
 from .simulation.simulate import simulate
@@ -84,6 +85,8 @@ __all__ = [
     "RealizabilityWarning",
     "Realization",
     "RigidBody",
+    "ServoDiagnosis",
+    "ServoTrajectory",
     "ShapeError",
     "StepProblem",
     "StepResult",
@@ -96,6 +99,10 @@ __all__ = [
     "Verification",
     "methods",
     "plot",
+    "replay",
+    "servo",
+    "servo_diagnosis",
+    "simulate_servo",
     "qp",
     "crosscheck",
     "realizability",

@@ -117,6 +117,7 @@ LAYERS = (
     "gausspp.step",
     "gausspp.model",
     "gausspp.simulation",
+    "gausspp.servo",
     "gausspp.scenes",
     "gausspp.verification",
     "gausspp.studies",

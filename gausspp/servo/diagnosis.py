@@ -48,7 +48,8 @@ class ServoDiagnosis:
             if any(self.chains)
             else ""
         )
-        return f"a {self.kind} realization: relative degrees {reach}{extension}; DAE index {self.index}"
+        article = "an" if self.kind[0] in "aeiou" else "a"
+        return f"{article} {self.kind} realization: relative degrees {reach}{extension}; DAE index {self.index}"
 
 
 def servo_diagnosis(model: Model, t: float, q: Any, v: Any) -> ServoDiagnosis:

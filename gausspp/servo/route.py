@@ -112,7 +112,7 @@ def simulate_servo(
     rtol: float = 1e-11,
     atol: float = 1e-12,
     record: Any = None,
-    pole: float = 10.0,
+    pole: float = 1.0,
 ) -> ServoTrajectory:
     """Follow the model's servo-constraints with its actuators, whatever their reach (module docstring).
 
@@ -140,7 +140,7 @@ def simulate_servo(
     zdot = ca.substitute(e.zdot, e.w, w)
     force = ca.substitute(e.force, e.w, w)
     z0 = consistent_start(hidden, reach, t, np.concatenate([q, v, np.zeros(sum(reach.extended.chains))]))
-    rhs = Bound(ca.Function("servo_rhs", [e.t, e.z], [zdot]))
+    rhs = Bound(ca.Function("servo_rhs", [e.t, e.z], ca.cse([zdot])))
     evaluations = 0
 
     def f(time: float, z: np.ndarray) -> np.ndarray:

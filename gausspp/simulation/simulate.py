@@ -17,8 +17,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import GaussppError
+from ..errors import GaussppError, RealizabilityError
 from ..model.model import Model
+from ..step import servo_reach
 from ..step.outcome import QP_TOLERANCE
 from . import lanes, recording
 from . import methods as _methods
@@ -120,14 +121,42 @@ def simulate(
     if model.contacts:
         return _labelled("events", model.route, lambda: run_contacts(model, q0, v0, lam0, stabilize, opts))
     stab = as_stabilization(stabilize, opts.dt)
-    y0, redundant, chosen = _start(model, q0, v0, lam0, stab, opts)
+    try:
+        y0, redundant, chosen = _start(model, q0, v0, lam0, stab, opts)
+    except RealizabilityError as exc:  # a servo reached only through higher derivatives: point to its route
+        raise servo_reach.explain(model, exc, opts.t0, q0, v0) from None
     rhs = _right_hand_side(model, opts, stab, redundant)
     samples = _run(chosen, rhs, model, stab, opts, y0, redundant)
-    return _labelled(
-        chosen.name,
-        model.route,
-        lambda: recording.finish(recording.record_smooth(model, rhs, samples), samples.failure, opts.throw),
+    return _servo_advice(
+        model,
+        opts.t0,
+        y0,
+        lambda: _labelled(
+            chosen.name,
+            model.route,
+            lambda: recording.finish(recording.record_smooth(model, rhs, samples), samples.failure, opts.throw),
+        ),
     )
+
+
+def _servo_advice(model: Model, t0: float, y0: np.ndarray, run: Callable[[], Trajectory]) -> Trajectory:
+    """``run()``; a realizability failure at the very start reworded by :func:`~gausspp.step.servo_reach.explain`
+    when the actuators reach the constraint through higher derivatives (raised, or in the trajectory's message)."""
+    q0, v0 = y0[: model.nq], y0[model.nq : model.nq + model.nv]
+    try:
+        traj = run()
+    except RealizabilityError as exc:
+        better = servo_reach.explain(model, exc, t0, q0, v0) if exc.t == t0 else exc
+        if better is exc:
+            raise
+        better.trajectory = getattr(exc, "trajectory", None)  # type: ignore[attr-defined]
+        raise better from None
+    if traj.status == "failed" and traj.t.size <= 1 and "not realizable" in traj.message:
+        better = servo_reach.explain(
+            model, RealizabilityError(traj.message, t=t0, constraint="", margin=0.0), t0, q0, v0
+        )
+        traj = replace(traj, message=str(better))
+    return traj
 
 
 def _labelled(lane: str, route: str, run: Callable[[], Trajectory]) -> Trajectory:

@@ -19,22 +19,24 @@ integrator — their force becomes a state, its derivative the new input — and
 tension; then ``r = (4, 4)`` and ``B`` is nonsingular.
 
 **Index and kind.** The servo DAE's differentiation index is ``max rᵢ + 1`` after extension (``2n + 1`` for a
-chain of ``n`` masses driven at one end and prescribed at the other). Blajer's kinds, from the cosines of
-``S`` (:mod:`gausspp.step.realizability`): *orthogonal* (all 1: the actuators push along the constraint
-normals, an ideal constraint), *oblique* (all nonzero), *tangential* (all zero: no actuator acts on the
-constrained accelerations) and *mixed* (some zero).
+chain of ``n`` masses driven at one end and prescribed at the other). Blajer's kinds (:func:`kind`), from the
+principal angles between the constraint normals and the reaction directions in the kinetic metric:
+*orthogonal* (all 0: the actuators push along the normals, an ideal constraint), *oblique* (none 90°),
+*tangential* (all 90°: ``J A⁻¹ D = 0``, no actuator acts on the constrained accelerations) and *mixed*
+(some 90°: the crane).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import casadi as ca
 import numpy as np
+from scipy.linalg import orth, svdvals
 
-from ..errors import InputError
+from ..errors import InputError, RealizabilityError
 from .protocol import StepModel
-from .realizability import cosines
 
 #: Dependence of a derivative on the inputs below this (relative to its dependence on the state) counts as none.
 REACH_TOL = 1e-9
@@ -87,8 +89,9 @@ def outputs(model: StepModel) -> ca.SX:
 
 
 def lie(h: ca.SX, e: Extended) -> ca.SX:
-    """``dh/dt`` along the extended motion."""
-    return ca.jtimes(h, e.z, e.zdot) + ca.jacobian(h, e.t)
+    """``dh/dt`` along the extended motion (common subexpressions merged: each derivative repeats much of the
+    last, and without the merge the twelfth derivative of a six-mass chain has ~10⁶ nodes instead of ~10³)."""
+    return ca.cse(ca.jtimes(h, e.z, e.zdot) + ca.jacobian(h, e.t))
 
 
 @dataclass
@@ -184,8 +187,44 @@ def find_reach(model: StepModel, t0: float, q0: np.ndarray, v0: np.ndarray, max_
 
 
 def kind(model: StepModel, A: np.ndarray, J: np.ndarray, D: np.ndarray) -> str:
-    """Blajer's name for the realization: orthogonal, oblique, tangential or mixed (module docstring)."""
-    cos = cosines(A, J, D) if J.size and D.size else np.zeros(0)
-    if cos.size < J.shape[0] or not np.all(cos > KIND_TOL):
-        return "tangential" if not np.any(cos > KIND_TOL) else "mixed"
-    return "orthogonal" if np.all(np.abs(cos - 1.0) <= 1e-9) else "oblique"
+    """Blajer's name for the realization, from the principal angles (in the kinetic metric ``A⁻¹``) between the
+    constraint normals ``Jᵀ`` and the reaction directions ``D``: *orthogonal* (the same subspace: every angle
+    0, an ideal constraint), *tangential* (perpendicular: every angle 90°, ``J A⁻¹ D = 0``), *mixed* (some at
+    90°) or *oblique* (none)."""
+    if not (J.size and D.size):
+        return "tangential"
+    L = np.linalg.cholesky(A)  # A⁻¹ = L⁻ᵀ L⁻¹: the metric's inner product is that of L⁻¹x and L⁻¹y
+    # cosines of the principal angles: singular values of the product of orthonormal bases (accurate near 90°,
+    # where scipy's subspace_angles, going through the angle, keeps only √ε)
+    cos = svdvals(orth(np.linalg.solve(L, J.T)).T @ orth(np.linalg.solve(L, D)))
+    right = cos <= KIND_TOL
+    if right.all():
+        return "tangential"
+    if right.any() or cos.size < min(J.shape[0], D.shape[1]):
+        return "mixed"
+    return "orthogonal" if np.all(1.0 - cos <= 1e-9) and J.shape[0] == D.shape[1] else "oblique"
+
+
+def explain(model: StepModel, exc: RealizabilityError, t: float, q: Any, v: Any) -> RealizabilityError:
+    """The one-step route's refusal ``exc``, reworded when the actuators do reach the constraint through a higher
+    derivative: then the advice is the servo route, not other actuators. Anything else is returned unchanged."""
+    if model.n_lam or not model.m or model.contacts or model.bounded:
+        return exc
+    try:
+        reach = find_reach(model, t, np.asarray(q, float), np.asarray(v, float))
+    except (InputError, RuntimeError):  # no actuator reaches it: the original advice stands
+        return exc
+    if reach.index <= 3 and not any(reach.extended.chains):
+        return exc
+    degrees = ", ".join(f"{r!r}: {d}" for r, d in zip(model.row_names, reach.degrees, strict=True))
+    extension = " (with integrators in front of some actuators)" if any(reach.extended.chains) else ""
+    names = ", ".join(repr(n) for n in model.names)
+    return RealizabilityError(
+        f"constraint(s) {names} cannot be kept step by step at t={t:.6g}: J A⁻¹ D is singular, yet the actuators "
+        f"reach the constraint through higher derivatives — relative degrees {degrees}{extension}, a servo DAE of "
+        f"index {reach.index}. This is not a wrong choice of actuators: follow the constraint with "
+        "gp.simulate_servo (index reduction); gp.servo_diagnosis tells how each actuator reaches it",
+        t=t,
+        constraint=", ".join(model.names),
+        margin=exc.margin,
+    )

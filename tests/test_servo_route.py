@@ -1,0 +1,121 @@
+"""Servo-constraints beyond the one-step formula (issue 19): the diagnosis, the index-reduction route, the replay.
+
+The references are the scenes' flat solutions (gausspp/scenes/overhead_crane.py, spring_chain_servo.py), derived
+with numpy polynomials from the path alone — nothing of the route (no Lie derivative, no extension, no feedback).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import gausspp as gp
+from gausspp.servo.route import ServoTrajectory
+
+
+@pytest.fixture(scope="module")
+def crane() -> tuple[gp.scenes.Scene, ServoTrajectory]:
+    scene = gp.scenes.get("overhead-crane")
+    return scene, gp.simulate_servo(scene.model, scene.q0, scene.v0, scene.t_end)
+
+
+def exact(scene: gp.scenes.Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    q = np.array([scene.exact(ti)[0] for ti in t])
+    forces = np.array([np.atleast_1d(scene.forces(ti)) for ti in t])
+    return q, forces
+
+
+def force_error(got: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Each actuator's largest error relative to its largest force."""
+    return np.abs(got - reference).max(axis=0) / np.abs(reference).max(axis=0)
+
+
+def test_the_crane_follows_its_flat_solution(crane) -> None:
+    scene, traj = crane
+    assert traj.status == "success" and traj.t[0] == 0.0 and traj.t[-1] == pytest.approx(scene.t_end)
+    q, forces = exact(scene, traj.t)
+    assert np.abs(traj.constraint).max() <= 1e-8  # the payload on its path, m
+    assert np.abs(traj.q[:, 0] - q[:, 0]).max() <= 1e-8  # the trolley, m
+    assert np.abs(traj.q - q).max() <= 1e-8
+    assert np.all(force_error(traj.forces, forces) <= 1e-6)  # F1, F2
+    assert not np.all(force_error(traj.forces * (1 + 1e-5), forces) <= 1e-6)  # a wrong force would show
+
+
+def test_the_crane_is_diagnosed_mixed_of_index_five(crane) -> None:
+    scene, traj = crane
+    d = gp.servo_diagnosis(scene.model, 0.0, scene.q0, scene.v0)
+    assert (d.kind, d.index, d.unextended, d.degrees, d.chains) == ("mixed", 5, (2, 2), (4, 4), (0, 2))
+    assert (traj.index, traj.degrees, traj.chains) == (5, (4, 4), (0, 2)) and not d.one_step
+    assert "mixed realization" in d.describe() and "DAE index 5" in d.describe()
+
+
+def test_the_crane_forces_alone_keep_the_payload_on_its_path(crane) -> None:
+    """Open loop: the free crane under the returned forces (interpolated), no constraint, no feedback."""
+    scene, traj = crane
+    assert np.abs(gp.replay(scene.model, traj).constraint).max() <= 1e-6
+    wrong = ServoTrajectory(**{**vars(traj), "forces": traj.forces * (1 + 1e-4)})
+    assert np.abs(gp.replay(scene.model, wrong).constraint).max() > 1e-6
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 6])
+def test_the_spring_chain_has_index_2n_plus_1_and_its_flat_force(n: int) -> None:
+    scene = gp.scenes.get("spring-chain-servo", n=n)
+    traj = gp.simulate_servo(scene.model, scene.q0, scene.v0, scene.t_end)
+    assert traj.status == "success" and traj.index == 2 * n + 1 and traj.degrees == (2 * n,)
+    _, forces = exact(scene, traj.t)
+    assert force_error(traj.forces, forces)[0] <= 1e-6
+    assert force_error(traj.forces + 1e-5 * np.abs(forces).max(), forces)[0] > 1e-6
+    kind = gp.servo_diagnosis(scene.model, 0.0, scene.q0, scene.v0).kind
+    assert kind == ("orthogonal" if n == 1 else "tangential")  # one mass: the force acts on it directly
+
+
+@pytest.mark.parametrize(
+    ("name", "params", "kind"),
+    [
+        ("two-masses", {"realization": "ideal"}, "orthogonal"),
+        ("two-masses", {"realization": "servo"}, "oblique"),
+        ("rigid-body-servo", {}, "orthogonal"),  # the torque along the normal (in the metric I⁻¹)
+        ("rigid-body-servo", {"n": (1.0, 0.2, 0.0)}, "oblique"),
+        ("pendulum", {}, "orthogonal"),
+        ("andrews", {}, "orthogonal"),
+    ],
+)
+def test_todays_scenes_are_orthogonal_or_oblique_and_one_step(name: str, params: dict, kind: str) -> None:
+    scene = gp.scenes.get(name, **params)
+    d = gp.servo_diagnosis(scene.model, 0.0, scene.q0, scene.v0)
+    assert d.kind == kind and d.one_step and not any(d.chains)
+    assert max(d.degrees) <= 2  # the forces appear in the constraint's first (velocity rows) or second derivative
+
+
+def test_the_one_step_refusal_points_to_the_servo_route() -> None:
+    scene = gp.scenes.get("overhead-crane")
+    for call in (
+        lambda: scene.model.step(0.0, scene.q0, scene.v0),
+        lambda: gp.simulate(scene.model, scene.q0, scene.v0, 1.0),
+    ):
+        with pytest.raises(gp.RealizabilityError) as caught:
+            call()
+        message = str(caught.value)
+        assert "gp.simulate_servo" in message and "index 5" in message
+        assert "choose force directions" not in message  # not the advice to change the actuators
+    traj = gp.simulate(scene.model, scene.q0, scene.v0, 1.0, throw=False)
+    assert traj.status == "failed" and "gp.simulate_servo" in traj.message
+
+
+def test_an_actuator_that_never_reaches_keeps_the_old_advice() -> None:
+    """Two free masses, the constraint on the second, the force on the first: no derivative ever reaches it."""
+    body = gp.Lagrangian(n=2, T=lambda q, v, t: 0.5 * (v[0] ** 2 + v[1] ** 2))
+    servo = gp.Holonomic(lambda q, t: q[1] - 0.1 * t**2, name="x2", realization=gp.Force(lambda q, v, t: [[1, 0]]))
+    model = gp.Model(body, servo)
+    with pytest.raises(gp.RealizabilityError, match="choose force directions"):
+        model.step(0.0, [0.0, 0.0], [0.0, 0.0])
+    with pytest.raises(gp.InputError, match="no actuator reaches constraint row"):
+        gp.simulate_servo(model, [0.0, 0.0], [0.0, 0.0], 1.0)
+
+
+def test_a_start_off_the_path_is_made_consistent_or_refused() -> None:
+    scene = gp.scenes.get("spring-chain-servo", n=2)
+    traj = gp.simulate_servo(scene.model, scene.q0 + 1e-3, scene.v0, 0.5)  # near the path: pulled onto it
+    assert np.abs(traj.constraint).max() <= 1e-8
+    with pytest.raises(gp.InputError, match="t_end must be after"):
+        gp.simulate_servo(scene.model, scene.q0, scene.v0, 0.0)
