@@ -119,3 +119,25 @@ def test_a_start_off_the_path_is_made_consistent_or_refused() -> None:
     assert np.abs(traj.constraint).max() <= 1e-8
     with pytest.raises(gp.InputError, match="t_end must be after"):
         gp.simulate_servo(scene.model, scene.q0, scene.v0, 0.0)
+
+
+def test_the_integral_principle_accepts_the_servo_motion_and_refuses_others(crane) -> None:
+    """(23) with the servo's own virtual displacements: the route's motion is one; the same payload path with
+    the trolley moved otherwise (other forces, the rope and angle following) is not; the replay under perturbed
+    forces leaves the path and is refused."""
+    from scipy.interpolate import CubicSpline
+
+    from gausspp.servo.route import ServoTrajectory
+
+    scene, _ = crane
+    traj = gp.simulate_servo(scene.model, scene.q0, scene.v0, scene.t_end, record=np.linspace(0, scene.t_end, 801))
+    assert gp.verify(scene.model, traj).is_motion
+    s, l, theta = traj.q.T
+    X, Y = s + l * np.sin(theta), -l * np.cos(theta)
+    s2 = s + 1e-3 * np.sin(np.pi * traj.t / scene.t_end) ** 2  # the trolley off its motion by up to 1 mm
+    q2 = np.column_stack([s2, np.hypot(X - s2, Y), np.arctan2(X - s2, -Y)])  # the payload still on its path
+    other = dict(t=traj.t, q=q2, v=CubicSpline(traj.t, q2).derivative()(traj.t))
+    assert not gp.verify(scene.model, other, constraint_tol=1e-5).is_motion
+    pushed = gp.replay(scene.model, ServoTrajectory(**{**vars(traj), "forces": traj.forces * (1 + 1e-3)}))
+    with pytest.raises(gp.InitialDataError, match="off the constraint"):
+        gp.verify(scene.model, pushed)
