@@ -60,9 +60,9 @@ class GaussProblem:
         if len(self.kind) != k or not set(self.kind) <= {"eq", "track", "ge"}:
             raise ShapeError(f"GaussProblem: kind needs one of 'eq', 'track', 'ge' per row ({k} rows)")
         for name in ("A", "a0", "D", "J", "phi"):
-            if not np.all(np.isfinite(getattr(self, name))):
+            if not np.isfinite(getattr(self, name)).all():
                 raise NonFiniteError(f"GaussProblem: {name} is not finite{at(self.t)}")
-        if np.any(self.lower > self.upper):
+        if (self.lower > self.upper).any():
             raise ShapeError(f"GaussProblem: a lower bound exceeds its upper bound{at(self.t)}")
 
 

@@ -51,12 +51,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import qp
+from . import dense, qp
 from .gauss_problem import GaussProblem, GaussSolution, at
 from .kept_rows import Reference, decide_rows
 from .qp import QP, QPBackend
 from .redundancy import DEPENDENCE_TOL
-from .scaling import RANK_TOL, Scaled, compress, range_basis, scaled, svd_rank, truncated_pinv
+from .scaling import RANGE_TOL, RANK_TOL, Scaled, compress, range_basis, rank_of, scaled, svd_rank, truncated_pinv
 from .stage import DUAL_TOL, FEASIBILITY_TOL, solve_stage
 
 __all__ = [
@@ -88,7 +88,7 @@ def features(p: GaussProblem) -> frozenset[str]:
     """The QP forms (:data:`gausspp.step.qp.FORMS`) the stages of ``p`` may need."""
     kind = set(p.kind)
     used = {"equality"}
-    if np.any(np.isfinite(p.lower)) or np.any(np.isfinite(p.upper)):
+    if np.isfinite(p.lower).any() or np.isfinite(p.upper).any():
         used.add("bounds")
     if "ge" in kind:
         used.add("inequalities")
@@ -129,6 +129,7 @@ class _Setup:
     bounded: bool
     Ws: np.ndarray  # W / cs
     rank_W: int  # rank of the reaction columns, judged at the reference
+    Q: np.ndarray | None  # without bounds: an orthonormal basis of range(Ws) (the compulsion stage's unknowns)
     backend: QPBackend
     where: str
 
@@ -137,11 +138,20 @@ class _Setup:
         kind = np.asarray(p.kind)
         ge = kind == "ge"
         lo, hi = p.lower.astype(float) / s.unit * s.cs, p.upper.astype(float) / s.unit * s.cs
+        bounded = bool(np.isfinite(lo).any() or np.isfinite(hi).any())
+        Ws = s.W / s.cs
         # dependent reaction columns (judged at the reference, with the rows' dependence tolerance): their
-        # least-norm multiplier leaves out the directions that only the drift separates
-        sv = np.linalg.svd(ref.W / ref.cs, compute_uv=False)
-        rank_W = int(np.sum(sv > DEPENDENCE_TOL * max(float(sv[0]) if sv.size else 0.0, 1e-300)))
-        bounded = bool(np.any(np.isfinite(lo)) or np.any(np.isfinite(hi)))
+        # least-norm multiplier leaves out the directions that only the drift separates. Without bounds the
+        # compulsion stage needs the SVD of Ws itself: one SVD serves both when the reference is the state.
+        Q = None
+        if bounded:
+            sv = dense.singular_values(ref.W / ref.cs)
+        elif ref is s:
+            U, sv, _ = dense.svd(Ws)
+            Q = U[:, : rank_of(sv, RANGE_TOL)]
+        else:
+            sv = dense.singular_values(ref.W / ref.cs)
+            Q = range_basis(Ws)
         return cls(
             p,
             s,
@@ -153,8 +163,9 @@ class _Setup:
             lo,
             hi,
             bounded,
-            s.W / s.cs,
-            rank_W,
+            Ws,
+            rank_of(sv, DEPENDENCE_TOL),
+            Q,
             backend,
             at(p.t),
         )
@@ -175,7 +186,8 @@ def _compulsion(
     # state (Hessian I for every backend, however close the reaction columns are to dependent). Off the
     # manifold redundant columns are independent by the drift; range(W) still holds the kept rows'
     # reactions there, so the acceleration is exactly the minimal model's.
-    Q = range_basis(c.Ws)
+    Q = c.Q
+    assert Q is not None
     E, e = compress(rows @ Q, rhs)
     free = np.full(Q.shape[1], np.inf)
     st = QP(np.eye(Q.shape[1]), np.zeros(Q.shape[1]), E, e, -c.s.Jn[c.ge] @ Q, c.h, -free, free, "compulsion")
@@ -253,11 +265,12 @@ def _solution(
     ):  # a saturated actuator delivers its bound (not the backend's round-off of it), and that is the reaction
         u = np.where(at_hi, hi, np.where(at_lo, lo, u))
         w = s.W @ u / s.unit
-    a = p.a0 + np.linalg.solve(s.L.T, w * s.unit)
+    reaction = w * s.unit
+    a = p.a0 + dense.solve(s.L.T, reaction)
     return GaussSolution(
         a=a,
         u=u,
-        compulsion=float(np.sum((w * s.unit) ** 2)),
+        compulsion=float(reaction @ reaction),
         residual=p.J @ a - p.phi,
         tracking_error=tracking_error,
         at_bound=at_lo | at_hi,

@@ -34,11 +34,11 @@ def off_manifold(
     Each row's residual is a distance in coordinates (``|g_i| / ‖J_i‖``, ``|Φ_i| / ‖J_i‖``) relative to the
     state's size; compared with :data:`REACH_TOL`.
     """
-    norms = np.linalg.norm(J, axis=1)
+    norms = np.sqrt(np.einsum("ij,ij->i", J, J))
     norms[norms == 0] = 1.0
     rows = model.holonomic_rows
-    off = np.abs(Phi) / norms / (1.0 + np.max(np.abs(v), initial=0.0))
-    off[rows] = np.maximum(off[rows], np.abs(g[rows]) / norms[rows] / (1.0 + np.max(np.abs(q))))
+    off = np.abs(Phi) / norms / (1.0 + float(np.abs(v).max(initial=0.0)))
+    off[rows] = np.maximum(off[rows], np.abs(g[rows]) / norms[rows] / (1.0 + float(np.abs(q).max())))
     worst = int(np.argmax(off)) if off.size else 0
     return (float(off[worst]) if off.size else 0.0), worst
 
