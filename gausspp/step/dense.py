@@ -50,3 +50,24 @@ def singular_values(M: np.ndarray) -> np.ndarray:
     if info != 0:
         raise np.linalg.LinAlgError("SVD did not converge")
     return s  # type: ignore[no-any-return]
+
+
+def lstsq(A: np.ndarray, B: np.ndarray, rcond: float | None = None) -> np.ndarray:
+    """The least-squares solution of least norm of ``A X = B`` (``B`` a vector or a matrix), as
+    :func:`numpy.linalg.lstsq`: singular values below ``rcond`` times the largest are dropped (``None``:
+    machine precision times the larger dimension)."""
+    m, n = A.shape
+    vector = B.ndim == 1
+    rhs = B.reshape(m, -1)
+    nrhs = rhs.shape[1]
+    if rcond is None:
+        rcond = float(np.finfo(float).eps) * max(m, n)
+    if A.size == 0 or nrhs == 0:
+        return np.zeros(n) if vector else np.zeros((n, nrhs))
+    if m < n:  # LAPACK returns the solution in B's storage: room for n rows
+        rhs = np.vstack([rhs, np.zeros((n - m, nrhs))])
+    work, iwork, info = lapack.dgelsd_lwork(m, n, nrhs, rcond)
+    x, _, _, info = lapack.dgelsd(A, rhs, int(work), iwork, rcond)
+    if info != 0:
+        raise np.linalg.LinAlgError("SVD did not converge in Linear Least Squares")
+    return x[:n, 0] if vector else x[:n]  # type: ignore[no-any-return]

@@ -48,10 +48,10 @@ def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarra
         keep[kept_local] = True
         dropped = eq_rows[~keep]
         if kept.size:  # each dropped row as a combination of the kept ones; its right-hand side must follow
-            combo = np.linalg.lstsq(ref.Jn[kept].T, ref.Jn[dropped].T, rcond=None)[0]
-            gap = float(np.max(np.abs(ref.r[dropped] - combo.T @ ref.r[kept])))
+            combo = dense.lstsq(ref.Jn[kept].T, ref.Jn[dropped].T)
+            gap = float(np.abs(ref.r[dropped] - combo.T @ ref.r[kept]).max())
         else:
-            gap = float(np.max(np.abs(ref.r[dropped])))
+            gap = float(np.abs(ref.r[dropped]).max())
     return kept, gap / max(ref.scale, 1e-300), sines
 
 

@@ -97,7 +97,7 @@ def _kinematics(model: StepModel) -> Kinematics:
 def _correction(A: np.ndarray, J: np.ndarray, D: np.ndarray, residual: np.ndarray) -> np.ndarray:
     """The least-squares move along ``A⁻¹D`` that removes ``residual`` of the rows ``J`` to first order."""
     AinvD = dense.solve(A, D)
-    return AinvD @ np.linalg.lstsq(J @ AinvD, residual, rcond=1e-10)[0]
+    return AinvD @ dense.lstsq(J @ AinvD, residual, 1e-10)
 
 
 def _project_positions(
