@@ -5,6 +5,7 @@ The problem and its stages are described in :mod:`gausspp.step.general`.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -92,6 +93,31 @@ class GaussSolution:
     stages: list[str] = field(default_factory=list)
     redundant_rows: int = 0
     S_norm: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+
+
+@dataclass(frozen=True)
+class RowKinds:
+    """The rows of each kind of a problem, as read-only masks (and the tracked rows' indices)."""
+
+    eq: np.ndarray
+    track: np.ndarray
+    ge: np.ndarray
+    tracked: np.ndarray
+
+
+@functools.lru_cache(maxsize=256)
+def _row_kinds(kind: tuple[str, ...]) -> RowKinds:
+    kinds = np.array(kind, dtype=str)
+    eq, track, ge = kinds == "eq", kinds == "track", kinds == "ge"
+    out = RowKinds(eq, track, ge, np.flatnonzero(track))
+    for mask in (out.eq, out.track, out.ge, out.tracked):
+        mask.flags.writeable = False
+    return out
+
+
+def row_kinds(p: GaussProblem) -> RowKinds:
+    """:class:`RowKinds` of ``p`` (the same object for every problem with the same kinds)."""
+    return _row_kinds(tuple(p.kind))
 
 
 def at(t: float) -> str:

@@ -52,7 +52,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import dense, qp
-from .gauss_problem import GaussProblem, GaussSolution, at
+from .gauss_problem import GaussProblem, GaussSolution, at, row_kinds
 from .kept_rows import Reference, decide_rows
 from .qp import QP, QPBackend
 from .redundancy import DEPENDENCE_TOL
@@ -135,8 +135,8 @@ class _Setup:
 
     @classmethod
     def build(cls, p: GaussProblem, s: Scaled, ref: Scaled, kept: np.ndarray, backend: QPBackend) -> _Setup:
-        kind = np.asarray(p.kind)
-        ge = kind == "ge"
+        kinds = row_kinds(p)
+        ge = kinds.ge
         lo, hi = p.lower.astype(float) / s.unit * s.cs, p.upper.astype(float) / s.unit * s.cs
         bounded = bool(np.isfinite(lo).any() or np.isfinite(hi).any())
         Ws = s.W / s.cs
@@ -156,7 +156,7 @@ class _Setup:
             p,
             s,
             kept,
-            np.flatnonzero(kind == "track"),
+            kinds.tracked,
             ge,
             -s.S[ge],
             -s.r[ge],
@@ -257,12 +257,15 @@ def _solution(
     """Back to the problem's units; a saturated actuator delivers exactly its bound."""
     p, s = c.p, c.s
     lo, hi = p.lower.astype(float), p.upper.astype(float)
-    u, tracking_error = np.clip(u * s.unit, lo, hi), tracking_error * s.unit
-    tol = 1e-9 * (1.0 + np.abs(u))
-    at_lo, at_hi = np.isfinite(lo) & (u - lo <= tol), np.isfinite(hi) & (hi - u <= tol)
-    if (
-        c.bounded
-    ):  # a saturated actuator delivers its bound (not the backend's round-off of it), and that is the reaction
+    u, tracking_error = u * s.unit, tracking_error * s.unit
+    finite_lo, finite_hi = np.isfinite(lo), np.isfinite(hi)
+    if finite_lo.any() or finite_hi.any():
+        u = np.clip(u, lo, hi)
+        tol = 1e-9 * (1.0 + np.abs(u))
+        at_lo, at_hi = finite_lo & (u - lo <= tol), finite_hi & (hi - u <= tol)
+    else:  # no bounds: nothing to clip, nothing at a bound
+        at_lo = at_hi = np.zeros(u.size, bool)
+    if c.bounded:  # a saturated actuator delivers its bound (not the backend's round-off of it): the reaction
         u = np.where(at_hi, hi, np.where(at_lo, lo, u))
         w = s.W @ u / s.unit
     reaction = w * s.unit

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import RealizabilityError
 from . import dense
-from .gauss_problem import GaussProblem, at, row_names
+from .gauss_problem import GaussProblem, at, row_kinds, row_names
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL, independent_rows
 from .scaling import Scaled, rank_of, scaled
 
@@ -94,8 +94,8 @@ def _contradiction(p: GaussProblem, eq: np.ndarray, gap: float) -> Realizability
 
 def decide_rows(p: GaussProblem, s: Scaled, consistency_tol: float, reference: Reference, near_manifold: bool) -> Rows:
     """The rows kept (see the module docstring); ``s`` is ``p`` scaled, the reference unless one is needed."""
-    kind = np.asarray(p.kind)
-    eq, track = kind == "eq", kind == "track"
+    kinds = row_kinds(p)
+    eq, track = kinds.eq, kinds.track
     ref = s
     kept, gap, sines = kept_rows(ref, eq)
     # rows that are independent here but not clearly so, or dependent rows that disagree, may be an artefact of
