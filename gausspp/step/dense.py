@@ -9,6 +9,8 @@ check); no finite check is repeated here.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy.linalg import lapack
 
@@ -46,6 +48,8 @@ def singular_values(M: np.ndarray) -> np.ndarray:
     """The singular values of ``M``, largest first."""
     if M.size == 0:
         return np.zeros(0)
+    if M.shape[0] == 1 or M.shape[1] == 1:  # one row or column: its length (hypot: no overflow, no underflow)
+        return np.array([math.hypot(*M.ravel().tolist())])
     s, info = lapack.dgesdd(M, compute_uv=0)[1::2]
     if info != 0:
         raise np.linalg.LinAlgError("SVD did not converge")

@@ -53,7 +53,7 @@ import numpy as np
 
 from . import dense, qp
 from .gauss_problem import GaussProblem, GaussSolution, at, row_kinds
-from .kept_rows import Reference, decide_rows
+from .kept_rows import NearManifold, Reference, decide_rows
 from .qp import QP, QPBackend
 from .redundancy import DEPENDENCE_TOL
 from .scaling import RANGE_TOL, RANK_TOL, Scaled, compress, range_basis, rank_of, scaled, svd_rank, truncated_pinv
@@ -288,7 +288,7 @@ def solve_general(
     backend: str | QPBackend | None = None,
     consistency_tol: float = CONSISTENCY_TOL,
     reference: Reference = None,
-    near_manifold: bool = False,
+    near_manifold: NearManifold = False,
 ) -> GaussSolution:
     """Solve the general Gauss step (see the module docstring) with a registry ``backend``.
 
@@ -298,7 +298,8 @@ def solve_general(
     clearly dependent, or disagree, or rows were dropped and ``near_manifold`` is false). Which bilateral rows are
     redundant, and whether they agree, is decided there (:mod:`gausspp.step.kept_rows`); ``p`` is then solved with
     the kept rows. ``near_manifold``: the state itself satisfies the constraints to within the caller's
-    tolerance, so dropped rows need no reference to show that they can hold together. ``consistency_tol``: how
+    tolerance, so dropped rows need no reference to show that they can hold together (or a function that
+    tells, called only when rows were dropped). ``consistency_tol``: how
     far (relative) dependent rows may disagree at the reference before it is an error.
 
     Raises

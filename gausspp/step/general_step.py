@@ -102,7 +102,7 @@ def solve_at(
         consistency_tol,
         reference=lambda: reference_problem(model, t, q, v, lam, stab, closed),
         # a state on the constraints is itself the witness that dependent rows hold together
-        near_manifold=on_manifold(model, d.J, d.Phi, d.g, q, v),
+        near_manifold=lambda: on_manifold(model, d.J, d.Phi, d.g, q, v),
     )
     result = _result(model, t, d, problem, free, sol, closed, backend)
     extras = {

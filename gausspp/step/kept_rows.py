@@ -92,7 +92,13 @@ def _contradiction(p: GaussProblem, eq: np.ndarray, gap: float) -> Realizability
     )
 
 
-def decide_rows(p: GaussProblem, s: Scaled, consistency_tol: float, reference: Reference, near_manifold: bool) -> Rows:
+#: Whether the state is on the constraint manifold, or a function that tells (called only when rows were dropped).
+NearManifold = bool | Callable[[], bool]
+
+
+def decide_rows(
+    p: GaussProblem, s: Scaled, consistency_tol: float, reference: Reference, near_manifold: NearManifold
+) -> Rows:
     """The rows kept (see the module docstring); ``s`` is ``p`` scaled, the reference unless one is needed."""
     kinds = row_kinds(p)
     eq, track = kinds.eq, kinds.track
@@ -102,7 +108,8 @@ def decide_rows(p: GaussProblem, s: Scaled, consistency_tol: float, reference: R
     # the state's distance from the manifold: decide at the nearest state on it
     ambiguous = bool(((sines > DEPENDENCE_TOL) & (sines < CLEARLY_INDEPENDENT)).any()) or gap > consistency_tol
     # dropped rows must hold together near the state: checked at the reference unless the state is a witness
-    ambiguous = ambiguous or (kept.size < int(eq.sum()) and not near_manifold)
+    if not ambiguous and kept.size < int(eq.sum()):
+        ambiguous = not (near_manifold() if callable(near_manifold) else near_manifold)
     if ambiguous and reference is not None:
         on_manifold = reference() if callable(reference) else reference
         if on_manifold is not None:
