@@ -37,7 +37,6 @@ def _trivial(st: QP) -> np.ndarray | None:
 
 def _call(st: QP, backend: QPBackend, where: str) -> QPAnswer:
     """The backend's answer; its own exceptions re-raised as ours."""
-    label = short_name(backend)
     try:
         return backend.solve_qp(st)
     except Exception as exc:  # the backend's own error, re-raised as ours
@@ -47,7 +46,9 @@ def _call(st: QP, backend: QPBackend, where: str) -> QPAnswer:
             if "positive definite" in str(exc)
             else ""
         )
-        raise QPSolveError(f"{label} failed on the {st.name} stage of the Gauss QP{where}: {exc}{hint}") from exc
+        raise QPSolveError(
+            f"{short_name(backend)} failed on the {st.name} stage of the Gauss QP{where}: {exc}{hint}"
+        ) from exc
 
 
 def violation(st: QP, x: np.ndarray) -> float:
@@ -67,13 +68,12 @@ def solve_stage(st: QP, backend: QPBackend, where: str, infeasible_ok: bool = Fa
     if trivial is not None:
         return trivial
     answer = _call(st, backend, where)
-    label = short_name(backend)
     x = answer.x
     if x is None or not np.isfinite(x).all():
         if infeasible_ok:
             return None
         raise QPSolveError(
-            f"{label} found no solution of the {st.name} stage of the Gauss QP{where}; "
+            f"{short_name(backend)} found no solution of the {st.name} stage of the Gauss QP{where}; "
             "the contacts, bounds and constraints may contradict each other — check the state, or try another backend"
         )
     x = np.asarray(x, float)
@@ -82,8 +82,8 @@ def solve_stage(st: QP, backend: QPBackend, where: str, infeasible_ok: bool = Fa
         if infeasible_ok:
             return None
         raise QPSolveError(
-            f"{label} returned a point that violates the {st.name} stage's constraints by {viol:.2e}{where}; "
-            + _EXACT_HINT
+            f"{short_name(backend)} returned a point that violates the {st.name} stage's constraints "
+            f"by {viol:.2e}{where}; " + _EXACT_HINT
         )
     if answer.found:  # optimality, not only feasibility: the dual residual where the backend reports multipliers
         size = 1.0 + float(np.abs(st.P @ x).max(initial=0.0)) + float(np.abs(st.q).max(initial=0.0))
@@ -91,7 +91,8 @@ def solve_stage(st: QP, backend: QPBackend, where: str, infeasible_ok: bool = Fa
             if infeasible_ok:
                 return None
             raise QPSolveError(
-                f"{label} returned a point that is not optimal on the {st.name} stage of the Gauss QP{where} "
+                f"{short_name(backend)} returned a point that is not optimal on the {st.name} stage of the Gauss "
+                f"QP{where} "
                 f"(relative dual residual {answer.dual / size:.2e}); " + _EXACT_HINT
             )
     return np.clip(x, st.lo, st.hi)
