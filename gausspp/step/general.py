@@ -42,7 +42,8 @@ constraint (``rank S < rank J``: conditions (12)/(16)) is an error here as every
 
 Modules: :mod:`~gausspp.step.gauss_problem` (the data), :mod:`~gausspp.step.scaling` (the unit-free form),
 :mod:`~gausspp.step.kept_rows` (the redundancy decision), :mod:`~gausspp.step.stage` (one stage by a backend,
-and the feasibility and optimality checks); here, the order of the stages.
+and the feasibility and optimality checks), :mod:`~gausspp.step.dense` (their small linear algebra, through LAPACK);
+here, the order of the stages.
 """
 
 from __future__ import annotations
@@ -137,7 +138,7 @@ class _Setup:
     def build(cls, p: GaussProblem, s: Scaled, ref: Scaled, kept: np.ndarray, backend: QPBackend) -> _Setup:
         kinds = row_kinds(p)
         ge = kinds.ge
-        lo, hi = p.lower.astype(float) / s.unit * s.cs, p.upper.astype(float) / s.unit * s.cs
+        lo, hi = np.asarray(p.lower, float) / s.unit * s.cs, np.asarray(p.upper, float) / s.unit * s.cs
         bounded = bool(np.isfinite(lo).any() or np.isfinite(hi).any())
         Ws = s.W / s.cs
         # dependent reaction columns (judged at the reference, with the rows' dependence tolerance): their
@@ -256,7 +257,7 @@ def _solution(
 ) -> GaussSolution:
     """Back to the problem's units; a saturated actuator delivers exactly its bound."""
     p, s = c.p, c.s
-    lo, hi = p.lower.astype(float), p.upper.astype(float)
+    lo, hi = np.asarray(p.lower, float), np.asarray(p.upper, float)
     u, tracking_error = u * s.unit, tracking_error * s.unit
     finite_lo, finite_hi = np.isfinite(lo), np.isfinite(hi)
     if finite_lo.any() or finite_hi.any():
