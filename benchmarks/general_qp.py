@@ -38,7 +38,7 @@ import qpsolvers
 from _timing import best_us
 
 import gausspp as gp
-import gausspp.model.model as _model_module
+import gausspp.step.general_step as _general_step
 from gausspp.scenes import crane, four_bar, saturated_crane
 from gausspp.scenes import two_actuator_servo as tas
 from gausspp.step.general import GaussProblem, solve_general
@@ -62,17 +62,17 @@ class Row:
 def captured_problem(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray) -> GaussProblem:
     """The GaussProblem ``model.general_step`` hands to the QP at this state."""
     seen: list[GaussProblem] = []
-    original = _model_module.solve_general
+    original = _general_step.solve_general
 
     def capture(problem: GaussProblem, backend: Any = None, *args: Any, **kwargs: Any) -> Any:
         seen.append(problem)
         return original(problem, backend, *args, **kwargs)
 
-    _model_module.solve_general = capture  # type: ignore[assignment]
+    _general_step.solve_general = capture  # type: ignore[assignment]
     try:
         model.general_step(t, q, v)
     finally:
-        _model_module.solve_general = original
+        _general_step.solve_general = original
     return seen[-1]
 
 

@@ -5,6 +5,7 @@ The problem and its stages are described in :mod:`gausspp.step.general`.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -60,9 +61,9 @@ class GaussProblem:
         if len(self.kind) != k or not set(self.kind) <= {"eq", "track", "ge"}:
             raise ShapeError(f"GaussProblem: kind needs one of 'eq', 'track', 'ge' per row ({k} rows)")
         for name in ("A", "a0", "D", "J", "phi"):
-            if not np.all(np.isfinite(getattr(self, name))):
+            if not np.isfinite(getattr(self, name)).all():
                 raise NonFiniteError(f"GaussProblem: {name} is not finite{at(self.t)}")
-        if np.any(self.lower > self.upper):
+        if (self.lower > self.upper).any():
             raise ShapeError(f"GaussProblem: a lower bound exceeds its upper bound{at(self.t)}")
 
 
@@ -92,6 +93,31 @@ class GaussSolution:
     stages: list[str] = field(default_factory=list)
     redundant_rows: int = 0
     S_norm: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+
+
+@dataclass(frozen=True)
+class RowKinds:
+    """The rows of each kind of a problem, as read-only masks (and the tracked rows' indices)."""
+
+    eq: np.ndarray
+    track: np.ndarray
+    ge: np.ndarray
+    tracked: np.ndarray
+
+
+@functools.lru_cache(maxsize=256)
+def _row_kinds(kind: tuple[str, ...]) -> RowKinds:
+    kinds = np.array(kind, dtype=str)
+    eq, track, ge = kinds == "eq", kinds == "track", kinds == "ge"
+    out = RowKinds(eq, track, ge, np.flatnonzero(track))
+    for mask in (out.eq, out.track, out.ge, out.tracked):
+        mask.flags.writeable = False
+    return out
+
+
+def row_kinds(p: GaussProblem) -> RowKinds:
+    """:class:`RowKinds` of ``p`` (the same object for every problem with the same kinds)."""
+    return _row_kinds(tuple(p.kind))
 
 
 def at(t: float) -> str:

@@ -42,7 +42,8 @@ constraint (``rank S < rank J``: conditions (12)/(16)) is an error here as every
 
 Modules: :mod:`~gausspp.step.gauss_problem` (the data), :mod:`~gausspp.step.scaling` (the unit-free form),
 :mod:`~gausspp.step.kept_rows` (the redundancy decision), :mod:`~gausspp.step.stage` (one stage by a backend,
-and the feasibility and optimality checks); here, the order of the stages.
+and the feasibility and optimality checks), :mod:`~gausspp.step.dense` (their small linear algebra, through LAPACK);
+here, the order of the stages.
 """
 
 from __future__ import annotations
@@ -51,12 +52,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import qp
-from .gauss_problem import GaussProblem, GaussSolution, at
-from .kept_rows import Reference, decide_rows
+from . import dense, qp
+from .gauss_problem import GaussProblem, GaussSolution, at, row_kinds
+from .kept_rows import NearManifold, Reference, decide_rows
 from .qp import QP, QPBackend
 from .redundancy import DEPENDENCE_TOL
-from .scaling import RANK_TOL, Scaled, compress, range_basis, scaled, svd_rank, truncated_pinv
+from .scaling import RANGE_TOL, RANK_TOL, Scaled, compress, range_basis, rank_of, scaled, svd_rank, truncated_pinv
 from .stage import DUAL_TOL, FEASIBILITY_TOL, solve_stage
 
 __all__ = [
@@ -88,7 +89,7 @@ def features(p: GaussProblem) -> frozenset[str]:
     """The QP forms (:data:`gausspp.step.qp.FORMS`) the stages of ``p`` may need."""
     kind = set(p.kind)
     used = {"equality"}
-    if np.any(np.isfinite(p.lower)) or np.any(np.isfinite(p.upper)):
+    if np.isfinite(p.lower).any() or np.isfinite(p.upper).any():
         used.add("bounds")
     if "ge" in kind:
         used.add("inequalities")
@@ -129,32 +130,43 @@ class _Setup:
     bounded: bool
     Ws: np.ndarray  # W / cs
     rank_W: int  # rank of the reaction columns, judged at the reference
+    Q: np.ndarray | None  # without bounds: an orthonormal basis of range(Ws) (the compulsion stage's unknowns)
     backend: QPBackend
     where: str
 
     @classmethod
     def build(cls, p: GaussProblem, s: Scaled, ref: Scaled, kept: np.ndarray, backend: QPBackend) -> _Setup:
-        kind = np.asarray(p.kind)
-        ge = kind == "ge"
-        lo, hi = p.lower.astype(float) / s.unit * s.cs, p.upper.astype(float) / s.unit * s.cs
+        kinds = row_kinds(p)
+        ge = kinds.ge
+        lo, hi = np.asarray(p.lower, float) / s.unit * s.cs, np.asarray(p.upper, float) / s.unit * s.cs
+        bounded = bool(np.isfinite(lo).any() or np.isfinite(hi).any())
+        Ws = s.W / s.cs
         # dependent reaction columns (judged at the reference, with the rows' dependence tolerance): their
-        # least-norm multiplier leaves out the directions that only the drift separates
-        sv = np.linalg.svd(ref.W / ref.cs, compute_uv=False)
-        rank_W = int(np.sum(sv > DEPENDENCE_TOL * max(float(sv[0]) if sv.size else 0.0, 1e-300)))
-        bounded = bool(np.any(np.isfinite(lo)) or np.any(np.isfinite(hi)))
+        # least-norm multiplier leaves out the directions that only the drift separates. Without bounds the
+        # compulsion stage needs the SVD of Ws itself: one SVD serves both when the reference is the state.
+        Q = None
+        if bounded:
+            sv = dense.singular_values(ref.W / ref.cs)
+        elif ref is s:
+            U, sv, _ = dense.svd(Ws)
+            Q = U[:, : rank_of(sv, RANGE_TOL)]
+        else:
+            sv = dense.singular_values(ref.W / ref.cs)
+            Q = range_basis(Ws)
         return cls(
             p,
             s,
             kept,
-            np.flatnonzero(kind == "track"),
+            kinds.tracked,
             ge,
             -s.S[ge],
             -s.r[ge],
             lo,
             hi,
             bounded,
-            s.W / s.cs,
-            rank_W,
+            Ws,
+            rank_of(sv, DEPENDENCE_TOL),
+            Q,
             backend,
             at(p.t),
         )
@@ -175,7 +187,8 @@ def _compulsion(
     # state (Hessian I for every backend, however close the reaction columns are to dependent). Off the
     # manifold redundant columns are independent by the drift; range(W) still holds the kept rows'
     # reactions there, so the acceleration is exactly the minimal model's.
-    Q = range_basis(c.Ws)
+    Q = c.Q
+    assert Q is not None
     E, e = compress(rows @ Q, rhs)
     free = np.full(Q.shape[1], np.inf)
     st = QP(np.eye(Q.shape[1]), np.zeros(Q.shape[1]), E, e, -c.s.Jn[c.ge] @ Q, c.h, -free, free, "compulsion")
@@ -244,20 +257,24 @@ def _solution(
 ) -> GaussSolution:
     """Back to the problem's units; a saturated actuator delivers exactly its bound."""
     p, s = c.p, c.s
-    lo, hi = p.lower.astype(float), p.upper.astype(float)
-    u, tracking_error = np.clip(u * s.unit, lo, hi), tracking_error * s.unit
-    tol = 1e-9 * (1.0 + np.abs(u))
-    at_lo, at_hi = np.isfinite(lo) & (u - lo <= tol), np.isfinite(hi) & (hi - u <= tol)
-    if (
-        c.bounded
-    ):  # a saturated actuator delivers its bound (not the backend's round-off of it), and that is the reaction
+    lo, hi = np.asarray(p.lower, float), np.asarray(p.upper, float)
+    u, tracking_error = u * s.unit, tracking_error * s.unit
+    finite_lo, finite_hi = np.isfinite(lo), np.isfinite(hi)
+    if finite_lo.any() or finite_hi.any():
+        u = np.clip(u, lo, hi)
+        tol = 1e-9 * (1.0 + np.abs(u))
+        at_lo, at_hi = finite_lo & (u - lo <= tol), finite_hi & (hi - u <= tol)
+    else:  # no bounds: nothing to clip, nothing at a bound
+        at_lo = at_hi = np.zeros(u.size, bool)
+    if c.bounded:  # a saturated actuator delivers its bound (not the backend's round-off of it): the reaction
         u = np.where(at_hi, hi, np.where(at_lo, lo, u))
         w = s.W @ u / s.unit
-    a = p.a0 + np.linalg.solve(s.L.T, w * s.unit)
+    reaction = w * s.unit
+    a = p.a0 + dense.solve(s.L.T, reaction)
     return GaussSolution(
         a=a,
         u=u,
-        compulsion=float(np.sum((w * s.unit) ** 2)),
+        compulsion=float(reaction @ reaction),
         residual=p.J @ a - p.phi,
         tracking_error=tracking_error,
         at_bound=at_lo | at_hi,
@@ -272,7 +289,7 @@ def solve_general(
     backend: str | QPBackend | None = None,
     consistency_tol: float = CONSISTENCY_TOL,
     reference: Reference = None,
-    near_manifold: bool = False,
+    near_manifold: NearManifold = False,
 ) -> GaussSolution:
     """Solve the general Gauss step (see the module docstring) with a registry ``backend``.
 
@@ -282,7 +299,8 @@ def solve_general(
     clearly dependent, or disagree, or rows were dropped and ``near_manifold`` is false). Which bilateral rows are
     redundant, and whether they agree, is decided there (:mod:`gausspp.step.kept_rows`); ``p`` is then solved with
     the kept rows. ``near_manifold``: the state itself satisfies the constraints to within the caller's
-    tolerance, so dropped rows need no reference to show that they can hold together. ``consistency_tol``: how
+    tolerance, so dropped rows need no reference to show that they can hold together (or a function that
+    tells, called only when rows were dropped). ``consistency_tol``: how
     far (relative) dependent rows may disagree at the reference before it is an error.
 
     Raises

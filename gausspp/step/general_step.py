@@ -13,12 +13,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, NonFiniteError
+from . import dense
 from .data import NO_STAB, StepData, evaluate
 from .general import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, solve_general
 from .manifold import on_manifold, reference_problem
 from .model_qp import closed_rows, gauss_problem
 from .protocol import StepModel
-from .realizability import cosines_and_margin
+from .realizability import normalized_cosines
 from .results import StepResult
 
 
@@ -30,16 +31,17 @@ def _check_contacts(model: StepModel, t: float, d: StepData, closed: np.ndarray)
             f"contact {model.contact_row_names[i]!r} is closed and approaching (ġ = {d.gdotc[i]:.3g}) at t={t:.6g}: "
             "the velocities must jump first — apply model.impact(...) or simulate, which does"
         )
-    if not np.all(np.isfinite(d.A)) or not np.all(np.isfinite(d.f + d.r0)):
+    if not np.isfinite(d.A).all() or not np.isfinite(d.f + d.r0).all():
         raise NonFiniteError(f"the mass matrix or the forces are not finite at t={t:.6g}; check the model there")
 
 
-def _problem(model: StepModel, t: float, d: StepData, closed: np.ndarray) -> GaussProblem:
+def _problem(model: StepModel, t: float, d: StepData, closed: np.ndarray) -> tuple[GaussProblem, np.ndarray]:
+    """The problem, and the free acceleration ``A⁻¹ f`` (both solves on one factorization of ``A``)."""
     try:
-        a0 = np.linalg.solve(d.A, d.f + d.r0)
+        a0, free = dense.solve(d.A, np.column_stack([d.f + d.r0, d.f])).T
     except np.linalg.LinAlgError:
-        a0 = np.zeros(model.nv)  # the QP's Cholesky reports the singular A
-    return gauss_problem(model, t, d.A, a0, d.J, d.phi, d.D, d.Jc, d.phic[closed], closed)
+        a0 = free = np.zeros(model.nv)  # the QP's Cholesky reports the singular A
+    return gauss_problem(model, t, d.A, a0, d.J, d.phi, d.D, d.Jc, d.phic[closed], closed), free
 
 
 def _result(
@@ -47,6 +49,7 @@ def _result(
     t: float,
     d: StepData,
     problem: GaussProblem,
+    free: np.ndarray,
     sol: GaussSolution,
     closed: np.ndarray,
     backend: str | None,
@@ -54,7 +57,7 @@ def _result(
     m, k = model.m, model.k
     contact_force = np.zeros(len(model.contact_row_names))
     contact_force[closed] = sol.u[m:]
-    cos, margin = cosines_and_margin(d.A, d.J, d.D)
+    cos, margin = normalized_cosines(sol.S_norm[:k, :m], d.D)
     return StepResult(
         t=t,
         a=sol.a,
@@ -65,7 +68,7 @@ def _result(
         cosines=cos,
         residual=sol.residual[:k],
         constraint_value=d.Phi,
-        free_acceleration=np.linalg.solve(d.A, d.f),
+        free_acceleration=free,
         solver=f"gauss-qp:{check_backend(backend)}",
         contact_force=contact_force,
         tracking_error=sol.tracking_error,
@@ -92,16 +95,16 @@ def solve_at(
     d = evaluate(model, t, q, v, lam, stab)
     closed = closed_rows(model, d.gc, closed)
     _check_contacts(model, t, d, closed)
-    problem = _problem(model, t, d, closed)
+    problem, free = _problem(model, t, d, closed)
     sol = solve_general(
         problem,
         backend,
         consistency_tol,
         reference=lambda: reference_problem(model, t, q, v, lam, stab, closed),
         # a state on the constraints is itself the witness that dependent rows hold together
-        near_manifold=on_manifold(model, d.J, d.Phi, d.g, q, v),
+        near_manifold=lambda: on_manifold(model, d.J, d.Phi, d.g, q, v),
     )
-    result = _result(model, t, d, problem, sol, closed, backend)
+    result = _result(model, t, d, problem, free, sol, closed, backend)
     extras = {
         "qdot": d.qdot,
         "energy": np.array([d.energy]),

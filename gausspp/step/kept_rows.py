@@ -17,9 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import RealizabilityError
-from .gauss_problem import GaussProblem, at, row_names
+from . import dense
+from .gauss_problem import GaussProblem, at, row_kinds, row_names
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL, independent_rows
-from .scaling import Scaled, scaled, svd_rank
+from .scaling import Scaled, rank_of, scaled
 
 #: The problem on the manifold, or a function that builds it (``None``: the state is on it already).
 Reference = GaussProblem | Callable[[], GaussProblem | None] | None
@@ -43,12 +44,14 @@ def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarra
     kept = eq_rows[kept_local]
     gap = 0.0
     if kept.size < eq_rows.size:
-        dropped = eq_rows[np.isin(np.arange(eq_rows.size), kept_local, invert=True)]
+        keep = np.zeros(eq_rows.size, bool)
+        keep[kept_local] = True
+        dropped = eq_rows[~keep]
         if kept.size:  # each dropped row as a combination of the kept ones; its right-hand side must follow
-            combo = np.linalg.lstsq(ref.Jn[kept].T, ref.Jn[dropped].T, rcond=None)[0]
-            gap = float(np.max(np.abs(ref.r[dropped] - combo.T @ ref.r[kept])))
+            combo = dense.lstsq(ref.Jn[kept].T, ref.Jn[dropped].T)
+            gap = float(np.abs(ref.r[dropped] - combo.T @ ref.r[kept]).max())
         else:
-            gap = float(np.max(np.abs(ref.r[dropped])))
+            gap = float(np.abs(ref.r[dropped]).max())
     return kept, gap / max(ref.scale, 1e-300), sines
 
 
@@ -61,8 +64,8 @@ def check_realizable(p: GaussProblem, ref: Scaled, mask: np.ndarray) -> None:
     if not mask.any():
         return
     Jn = ref.Jn[mask]
-    rank_J = svd_rank(Jn @ Jn.T)[3]
-    rank_S = svd_rank(ref.S[mask])[3]
+    rank_J = rank_of(dense.singular_values(Jn @ Jn.T))
+    rank_S = rank_of(dense.singular_values(ref.S[mask]))
     if rank_S < rank_J:
         names = row_names(p)
         raise RealizabilityError(
@@ -89,17 +92,24 @@ def _contradiction(p: GaussProblem, eq: np.ndarray, gap: float) -> Realizability
     )
 
 
-def decide_rows(p: GaussProblem, s: Scaled, consistency_tol: float, reference: Reference, near_manifold: bool) -> Rows:
+#: Whether the state is on the constraint manifold, or a function that tells (called only when rows were dropped).
+NearManifold = bool | Callable[[], bool]
+
+
+def decide_rows(
+    p: GaussProblem, s: Scaled, consistency_tol: float, reference: Reference, near_manifold: NearManifold
+) -> Rows:
     """The rows kept (see the module docstring); ``s`` is ``p`` scaled, the reference unless one is needed."""
-    kind = np.asarray(p.kind)
-    eq, track = kind == "eq", kind == "track"
+    kinds = row_kinds(p)
+    eq, track = kinds.eq, kinds.track
     ref = s
     kept, gap, sines = kept_rows(ref, eq)
     # rows that are independent here but not clearly so, or dependent rows that disagree, may be an artefact of
     # the state's distance from the manifold: decide at the nearest state on it
-    ambiguous = bool(np.any((sines > DEPENDENCE_TOL) & (sines < CLEARLY_INDEPENDENT))) or gap > consistency_tol
+    ambiguous = bool(((sines > DEPENDENCE_TOL) & (sines < CLEARLY_INDEPENDENT)).any()) or gap > consistency_tol
     # dropped rows must hold together near the state: checked at the reference unless the state is a witness
-    ambiguous = ambiguous or (kept.size < int(eq.sum()) and not near_manifold)
+    if not ambiguous and kept.size < int(eq.sum()):
+        ambiguous = not (near_manifold() if callable(near_manifold) else near_manifold)
     if ambiguous and reference is not None:
         on_manifold = reference() if callable(reference) else reference
         if on_manifold is not None:

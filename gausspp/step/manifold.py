@@ -8,6 +8,7 @@ and builds the reference problem there (:func:`reference_problem`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import casadi as ca
@@ -15,6 +16,8 @@ import numpy as np
 
 from ..errors import RealizabilityError
 from ..workspace import workspace
+from . import dense
+from .bound import Bound, dense_outputs, load_inputs
 from .data import evaluate
 from .general import GaussProblem
 from .model_qp import gauss_problem
@@ -34,11 +37,11 @@ def off_manifold(
     Each row's residual is a distance in coordinates (``|g_i| / ‖J_i‖``, ``|Φ_i| / ‖J_i‖``) relative to the
     state's size; compared with :data:`REACH_TOL`.
     """
-    norms = np.linalg.norm(J, axis=1)
+    norms = np.sqrt(np.einsum("ij,ij->i", J, J))
     norms[norms == 0] = 1.0
     rows = model.holonomic_rows
-    off = np.abs(Phi) / norms / (1.0 + np.max(np.abs(v), initial=0.0))
-    off[rows] = np.maximum(off[rows], np.abs(g[rows]) / norms[rows] / (1.0 + np.max(np.abs(q))))
+    off = np.abs(Phi) / norms / (1.0 + float(np.abs(v).max(initial=0.0)))
+    off[rows] = np.maximum(off[rows], np.abs(g[rows]) / norms[rows] / (1.0 + float(np.abs(q).max())))
     worst = int(np.argmax(off)) if off.size else 0
     return (float(off[worst]) if off.size else 0.0), worst
 
@@ -66,18 +69,35 @@ def check_reachable(
     )
 
 
-def _kinematics(model: StepModel) -> ca.Function:
-    """``∂q̇/∂v``: how a change of velocity coordinates moves ``q`` (the identity unless ``q̇ ≠ v``)."""
+Kinematics = Callable[[float, np.ndarray, np.ndarray], np.ndarray]
+
+
+def _build_kinematics(model: StepModel) -> Kinematics:
     mech = model.mechanism
-    return workspace(model).get(
-        ("kinematics",), lambda: ca.Function("K", [mech.t, mech.q, mech.v], [ca.jacobian(mech.qdot, mech.v)])
-    )
+    K = ca.jacobian(mech.qdot, mech.v)
+    if K.is_constant():  # generalized coordinates (q̇ = v): one matrix for every state
+        value = np.array(ca.evalf(K), dtype=float)
+        return lambda t, q, v: value
+    bound = Bound(ca.Function("K", [mech.t, mech.q, mech.v], dense_outputs([K])))
+
+    def call(t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        load_inputs(bound.args, (t, q, v))
+        bound.eval()
+        return bound.res[0].reshape(bound.shapes[0], order="F").copy()
+
+    return call
+
+
+def _kinematics(model: StepModel) -> Kinematics:
+    """``∂q̇/∂v`` at ``(t, q, v)``: how a change of velocity coordinates moves ``q`` (the identity unless
+    ``q̇ ≠ v``)."""
+    return workspace(model).get(("kinematics",), lambda: _build_kinematics(model))
 
 
 def _correction(A: np.ndarray, J: np.ndarray, D: np.ndarray, residual: np.ndarray) -> np.ndarray:
     """The least-squares move along ``A⁻¹D`` that removes ``residual`` of the rows ``J`` to first order."""
-    AinvD = np.linalg.solve(A, D)
-    return AinvD @ np.linalg.lstsq(J @ AinvD, residual, rcond=1e-10)[0]
+    AinvD = dense.solve(A, D)
+    return AinvD @ dense.lstsq(J @ AinvD, residual, 1e-10)
 
 
 def _project_positions(
@@ -92,13 +112,13 @@ def _project_positions(
         J, g, D = d.J[rows], d.g[rows], d.D[:, cols]
         use = np.arange(len(rows))
         if phase == "clear":
-            use, _ = independent_rows(np.linalg.solve(np.linalg.cholesky(d.A), J.T).T, CLEARLY_INDEPENDENT)
+            use, _ = independent_rows(dense.solve(dense.cholesky(d.A), J.T).T, CLEARLY_INDEPENDENT)
         size = float(np.max(np.abs(g[use]), initial=0.0))
         if not size < previous or size == 0.0:  # converged to round-off (or no longer converging)
             break
         previous = size
         step = _correction(d.A, J[use], D, g[use])
-        q = model.mechanism.normalize_array(q - np.array(_kinematics(model)(t, q, v)) @ step)
+        q = model.mechanism.normalize_array(q - _kinematics(model)(t, q, v) @ step)
     return q
 
 

@@ -10,7 +10,7 @@ directions) are redundant. By convention the margin is 1 with no constraint rows
 fewer reaction directions than rows (``k > m``: ``S`` cannot have rank ``k``).
 
 Every margin of the package comes from here: from the data (:func:`cosines`, :func:`margin`,
-:func:`cosines_and_margin`), from a kernel's ``S_norm`` (:func:`singular_values`,
+:func:`cosines_and_margin`, :func:`normalized_cosines`), from a kernel's ``S_norm`` (:func:`singular_values`,
 :func:`step_margin`, :func:`stacked_margins`), inside a casadi graph (:func:`margin_bound`, and exactly for one or two
 rows :func:`graph_cosines`), all through the one rule :func:`margin_of`.
 """
@@ -20,6 +20,8 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 from scipy.linalg import eigvals_banded
+
+from . import dense
 
 #: Above this many constraint rows :func:`margin_bound` is ``+inf`` (it needs a symbolic k × k inverse):
 #: the compiled lane then checks the margin at the recorded samples only.
@@ -66,6 +68,19 @@ def cosines_and_margin(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> tuple[np.
     J2, D2 = np.atleast_2d(J), np.atleast_2d(D)
     k, m = (J2.shape[0] if np.size(J) else 0), D2.shape[1]
     cos = cosines(A, J2, D2) if k else np.zeros(0)
+    return cos, margin_of(cos, k, m)
+
+
+def normalized_cosines(S_norm: np.ndarray, D: np.ndarray) -> tuple[np.ndarray, float]:
+    """:func:`cosines_and_margin` from ``S_norm``, the ``J A⁻¹ D`` already normalized (k × m, every row of ``J``
+    nonzero), and ``D``: a zero column of ``D`` gives zero cosines, as in :func:`cosines`."""
+    k, m = S_norm.shape
+    if k == 0:
+        cos = np.zeros(0)
+    elif not D.any(axis=0).all():  # nothing to push with
+        cos = np.zeros(min(k, m))
+    else:
+        cos = dense.singular_values(S_norm)
     return cos, margin_of(cos, k, m)
 
 

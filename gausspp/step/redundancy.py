@@ -49,19 +49,21 @@ def independent_rows(rows: np.ndarray, tol: float = DEPENDENCE_TOL) -> tuple[np.
     sines : (k,) array
         Each row's distance to the span of the rows kept before it (its sine against them).
     """
+    rows = np.asarray(rows, dtype=float)
     k, n = rows.shape
     basis = np.zeros((min(k, n), n))  # orthonormal rows spanning the kept rows
     kept: list[int] = []
     sines = np.zeros(k)
     for i in range(k):
-        r = np.asarray(rows[i], dtype=float)
+        r = rows[i]
         size = math.sqrt(float(r @ r))
         if size == 0:
             continue
         r = r / size
-        B = basis[: len(kept)]
-        for _ in range(2):  # Gram–Schmidt twice: orthogonal to round-off even for nearly dependent rows
-            r = r - B.T @ (B @ r)
+        if kept:  # (nothing to project out before the first row is kept)
+            B = basis[: len(kept)]
+            for _ in range(2):  # Gram–Schmidt twice: orthogonal to round-off even for nearly dependent rows
+                r = r - B.T @ (B @ r)
         sines[i] = math.sqrt(float(r @ r))
         if sines[i] > tol and len(kept) < n:
             basis[len(kept)] = r / sines[i]

@@ -14,10 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import NotPositiveDefiniteError, RealizabilityError
+from . import dense
 from .gauss_problem import GaussProblem, at, row_names
 
 #: Singular values below this fraction of the largest count as zero (rows are normalized first).
 RANK_TOL = 1e-9
+#: :func:`range_basis` keeps the singular directions above this fraction of the largest singular value.
+RANGE_TOL = 1e-13
 
 
 @dataclass(frozen=True)
@@ -37,54 +40,68 @@ class Scaled:
 
 def _factor(p: GaussProblem) -> np.ndarray:
     """``L`` with ``L Lᵀ = A``; names a mass matrix that is not symmetric positive definite."""
-    where = at(p.t)
     try:
-        L = np.linalg.cholesky(p.A)
+        L = dense.cholesky(p.A)
     except np.linalg.LinAlgError:
         raise NotPositiveDefiniteError(
-            f"the mass matrix A is not positive definite{where}; check the model's inertia"
+            f"the mass matrix A is not positive definite{at(p.t)}; check the model's inertia"
         ) from None
-    if np.max(np.abs(p.A - p.A.T)) > 1e-12 * np.max(np.abs(p.A)):
-        raise NotPositiveDefiniteError(f"the mass matrix A is not symmetric{where}")
+    if np.abs(p.A - p.A.T).max() > 1e-12 * np.abs(p.A).max():
+        raise NotPositiveDefiniteError(f"the mass matrix A is not symmetric{at(p.t)}")
     return L
+
+
+def _zero_row(p: GaussProblem, i: int) -> RealizabilityError:
+    name = row_names(p)[i]
+    return RealizabilityError(
+        f"constraint row {name!r} has a zero gradient{at(p.t)}: it does not restrict the acceleration",
+        t=p.t,
+        constraint=name,
+        margin=0.0,
+    )
+
+
+def _unit(r: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> float:
+    """The problem's size: the largest ``|r|``, else the largest finite bound, else 1."""
+    if r.size and (largest := float(np.abs(r).max())):
+        return largest
+    bounds = np.abs(np.concatenate([lower, upper]))
+    bounds = bounds[np.isfinite(bounds)]
+    return float(bounds.max()) if bounds.size and bounds.max() else 1.0
 
 
 def scaled(p: GaussProblem) -> Scaled:
     """Factor ``A``, normalize rows and columns and bring the problem to unit size; names bad data."""
     L = _factor(p)
-    # (LAPACK's general solve: on small matrices scipy's triangular solve was measured 100× slower on a
-    # loaded machine, through BLAS threading)
-    W = np.linalg.solve(L, p.D)  # L⁻¹ D
-    Jt = np.linalg.solve(L, p.J.T).T  # J L⁻ᵀ
-    norms = np.linalg.norm(Jt, axis=1)
-    names = row_names(p)
-    for i in np.flatnonzero(norms == 0):
-        raise RealizabilityError(
-            f"constraint row {names[i]!r} has a zero gradient{at(p.t)}: it does not restrict the acceleration",
-            t=p.t,
-            constraint=names[i],
-            margin=0.0,
-        )
+    m = p.D.shape[1]
+    # L⁻¹ [D, Jᵀ] in one LAPACK general solve (on small matrices scipy's triangular solve was measured 100×
+    # slower on a loaded machine, through BLAS threading)
+    X = dense.solve(L, np.hstack([p.D, p.J.T]))
+    W, Jt = X[:, :m], X[:, m:].T  # L⁻¹ D and J L⁻ᵀ
+    norms = np.sqrt(np.einsum("ij,ij->i", Jt, Jt))
+    if norms.size and not norms.all():
+        raise _zero_row(p, int(np.flatnonzero(norms == 0)[0]))
     # unknowns scaled to unit columns of W (ũ = c ⊙ u): H has a unit diagonal, whatever the units of u
-    cs = np.linalg.norm(W, axis=0)
+    cs = np.sqrt(np.einsum("ij,ij->j", W, W))
     cs[cs == 0] = 1.0
     Jn = Jt / norms[:, None]
     S = (Jn @ W) / cs
-    r = (p.phi - p.J @ p.a0) / norms
-    scale = float(np.max(np.abs(p.phi / norms), initial=0.0) + np.max(np.abs(p.J @ p.a0 / norms), initial=0.0))
-    finite_bounds = np.abs(np.concatenate([p.lower, p.upper]))
-    finite_bounds = finite_bounds[np.isfinite(finite_bounds)]
-    unit = float(np.max(np.abs(r), initial=0.0)) or float(np.max(finite_bounds, initial=0.0)) or 1.0
+    Ja0 = p.J @ p.a0
+    r = (p.phi - Ja0) / norms
+    scale = float(np.abs(p.phi / norms).max() + np.abs(Ja0 / norms).max()) if r.size else 0.0
+    unit = _unit(r, p.lower, p.upper)
     return Scaled(L, W, Jn, norms, cs, S, r / unit, scale / unit, unit)
 
 
 def svd_rank(M: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
     """``U, s, Vᵀ`` of ``M`` and its numerical rank (singular values above :data:`RANK_TOL` of the largest)."""
-    if M.size == 0:
-        return np.zeros((M.shape[0], 0)), np.zeros(0), np.zeros((0, M.shape[1])), 0
-    U, s, Vt = np.linalg.svd(M, full_matrices=False)
-    rank = int(np.sum(s > RANK_TOL * max(s[0], 1e-300))) if s.size else 0
-    return U, s, Vt, rank
+    U, s, Vt = dense.svd(M)
+    return U, s, Vt, rank_of(s)
+
+
+def rank_of(s: np.ndarray, tol: float = RANK_TOL) -> int:
+    """How many of the singular values ``s`` (largest first) exceed ``tol`` times the largest."""
+    return int(np.count_nonzero(s > tol * max(float(s[0]), 1e-300))) if s.size else 0
 
 
 def compress(S: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -94,12 +111,12 @@ def compress(S: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def range_basis(M: np.ndarray) -> np.ndarray:
-    """An orthonormal basis of ``range(M)`` (numerical rank: singular values above 1e-13 of the largest)."""
-    U, s, _ = np.linalg.svd(M, full_matrices=False)
-    return U[:, : int(np.sum(s > 1e-13 * max(float(s[0]) if s.size else 0.0, 1e-300)))]
+    """An orthonormal basis of ``range(M)`` (numerical rank: :data:`RANGE_TOL`)."""
+    U, s, _ = dense.svd(M)
+    return U[:, : rank_of(s, RANGE_TOL)]
 
 
 def truncated_pinv(M: np.ndarray, rank: int) -> np.ndarray:
     """The pseudo-inverse of ``M`` restricted to its ``rank`` largest singular values."""
-    U, s, Vt = np.linalg.svd(M, full_matrices=False)
+    U, s, Vt = dense.svd(M)
     return (Vt[:rank].T / s[:rank]) @ U[:, :rank].T

@@ -30,14 +30,13 @@ def _trivial(st: QP) -> np.ndarray | None:
     m = st.q.size
     if m == 0:  # nothing to choose
         return np.zeros(0)
-    if st.E.size == 0 and st.G.size == 0 and np.all(st.lo <= 0) and np.all(st.hi >= 0) and not np.any(st.q):
+    if st.E.size == 0 and st.G.size == 0 and (st.lo <= 0).all() and (st.hi >= 0).all() and not st.q.any():
         return np.zeros(m)  # u = 0 minimizes the (convex, zero-gradient) objective
     return None
 
 
 def _call(st: QP, backend: QPBackend, where: str) -> QPAnswer:
     """The backend's answer; its own exceptions re-raised as ours."""
-    label = short_name(backend)
     try:
         return backend.solve_qp(st)
     except Exception as exc:  # the backend's own error, re-raised as ours
@@ -47,18 +46,20 @@ def _call(st: QP, backend: QPBackend, where: str) -> QPAnswer:
             if "positive definite" in str(exc)
             else ""
         )
-        raise QPSolveError(f"{label} failed on the {st.name} stage of the Gauss QP{where}: {exc}{hint}") from exc
+        raise QPSolveError(
+            f"{short_name(backend)} failed on the {st.name} stage of the Gauss QP{where}: {exc}{hint}"
+        ) from exc
 
 
 def violation(st: QP, x: np.ndarray) -> float:
     """The relative violation of the stage's constraints at ``x`` (see the module docstring)."""
-    scale = 1.0 + float(np.max(np.abs(x), initial=0.0))
+    scale = 1.0 + float(np.abs(x).max(initial=0.0))
     viol = 0.0
     if st.E.size:
-        viol = max(viol, float(np.max(np.abs(st.E @ x - st.e))) / (scale * (1 + np.max(np.abs(st.E)))))
+        viol = max(viol, float(np.abs(st.E @ x - st.e).max()) / (scale * (1 + float(np.abs(st.E).max()))))
     if st.G.size:
-        viol = max(viol, float(np.max(st.G @ x - st.h, initial=0.0)) / (scale * (1 + np.max(np.abs(st.G)))))
-    return max(viol, float(np.max(st.lo - x, initial=0.0)) / scale, float(np.max(x - st.hi, initial=0.0)) / scale)
+        viol = max(viol, float((st.G @ x - st.h).max(initial=0.0)) / (scale * (1 + float(np.abs(st.G).max()))))
+    return max(viol, float((st.lo - x).max(initial=0.0)) / scale, float((x - st.hi).max(initial=0.0)) / scale)
 
 
 def solve_stage(st: QP, backend: QPBackend, where: str, infeasible_ok: bool = False) -> np.ndarray | None:
@@ -67,13 +68,12 @@ def solve_stage(st: QP, backend: QPBackend, where: str, infeasible_ok: bool = Fa
     if trivial is not None:
         return trivial
     answer = _call(st, backend, where)
-    label = short_name(backend)
     x = answer.x
-    if x is None or not np.all(np.isfinite(x)):
+    if x is None or not np.isfinite(x).all():
         if infeasible_ok:
             return None
         raise QPSolveError(
-            f"{label} found no solution of the {st.name} stage of the Gauss QP{where}; "
+            f"{short_name(backend)} found no solution of the {st.name} stage of the Gauss QP{where}; "
             "the contacts, bounds and constraints may contradict each other — check the state, or try another backend"
         )
     x = np.asarray(x, float)
@@ -82,16 +82,17 @@ def solve_stage(st: QP, backend: QPBackend, where: str, infeasible_ok: bool = Fa
         if infeasible_ok:
             return None
         raise QPSolveError(
-            f"{label} returned a point that violates the {st.name} stage's constraints by {viol:.2e}{where}; "
-            + _EXACT_HINT
+            f"{short_name(backend)} returned a point that violates the {st.name} stage's constraints "
+            f"by {viol:.2e}{where}; " + _EXACT_HINT
         )
     if answer.found:  # optimality, not only feasibility: the dual residual where the backend reports multipliers
-        size = 1.0 + float(np.max(np.abs(st.P @ x), initial=0.0)) + float(np.max(np.abs(st.q), initial=0.0))
+        size = 1.0 + float(np.abs(st.P @ x).max(initial=0.0)) + float(np.abs(st.q).max(initial=0.0))
         if np.isfinite(answer.dual) and answer.dual > DUAL_TOL * size:
             if infeasible_ok:
                 return None
             raise QPSolveError(
-                f"{label} returned a point that is not optimal on the {st.name} stage of the Gauss QP{where} "
+                f"{short_name(backend)} returned a point that is not optimal on the {st.name} stage of the Gauss "
+                f"QP{where} "
                 f"(relative dual residual {answer.dual / size:.2e}); " + _EXACT_HINT
             )
     return np.clip(x, st.lo, st.hi)
