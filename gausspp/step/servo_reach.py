@@ -205,13 +205,26 @@ def kind(model: StepModel, A: np.ndarray, J: np.ndarray, D: np.ndarray) -> str:
     return "orthogonal" if np.all(1.0 - cos <= 1e-9) and J.shape[0] == D.shape[1] else "oblique"
 
 
+def evaluate_J(model: StepModel, t: float, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The constraint Jacobian ``J`` at the state (numbers)."""
+    t_, q_, v_, lam, stab = model.inputs
+    fn = ca.Function("J", [t_, q_, v_, lam, stab], [model.expressions.J])
+    return np.array(fn(t, q, v, np.zeros(lam.numel()), np.zeros(stab.numel())), float)
+
+
 def explain(model: StepModel, exc: RealizabilityError, t: float, q: Any, v: Any) -> RealizabilityError:
     """The one-step route's refusal ``exc``, reworded when the actuators do reach the constraint through a higher
     derivative: then the advice is the servo route, not other actuators. Anything else is returned unchanged."""
-    if model.n_lam or not model.m or model.contacts or model.bounded:
+    if model.n_lam or model.m != model.k or model.contacts or model.bounded:
+        return exc
+    if any(g.label != "force" for g in model.groups):  # only actuators can be out of reach; rows of other
+        return exc  # realizations that fail are dependent rows or directions: the original advice stands
+    q, v = np.asarray(q, float), np.asarray(v, float)
+    J = evaluate_J(model, t, q, v)
+    if np.linalg.matrix_rank(J) < model.k:  # redundant rows, not a question of reach
         return exc
     try:
-        reach = find_reach(model, t, np.asarray(q, float), np.asarray(v, float))
+        reach = find_reach(model, t, q, v, max_extensions=4)
     except (InputError, RuntimeError):  # no actuator reaches it: the original advice stands
         return exc
     if reach.index <= 3 and not any(reach.extended.chains):
