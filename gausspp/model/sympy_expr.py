@@ -107,9 +107,7 @@ def _leaf_or_function(expr: Any, leaves: Mapping[Any, Any]) -> Any:
             "the equations)"
         )
     if expr.is_Symbol:
-        raise InputError(
-            f"sympy expression: the symbol {expr} has no value; give it one in parameters={{{expr}: ...}}"
-        )
+        raise InputError(f"sympy expression: the symbol {expr} has no value; give it one in parameters={{{expr}: ...}}")
     if expr.is_Function and name in FUNCTIONS:
         return FUNCTIONS[name](*[to_casadi(a, leaves) for a in expr.args])
     if expr.is_Function and type(expr.func).__name__ == "UndefinedFunction":
@@ -121,4 +119,3 @@ def _leaf_or_function(expr: Any, leaves: Mapping[Any, Any]) -> Any:
         f"sympy expression: casadi has no counterpart for {name} in the term {expr}; "
         f"supported functions: {', '.join(sorted(FUNCTIONS))} (and sums, products, powers, numbers)"
     )
-
