@@ -25,7 +25,7 @@ def _numeric(matrix, subs):
 
 def _sympy_acceleration(method, q, u, params):
     """sympy's own answer: its (constraint-augmented) mass matrix and forcing, solved numerically."""
-    subs = {**params, **dict(zip(method.q, q)), **dict(zip(method.u, u))}
+    subs = {**params, **dict(zip(method.q, q, strict=True)), **dict(zip(method.u, u, strict=True))}
     return np.linalg.solve(_numeric(method.mass_matrix, subs), _numeric(method.forcing, subs).ravel())
 
 
@@ -71,7 +71,7 @@ def _disk_state(kane, rolling, rng):
     """Random q and independent speeds; ẋ, ẏ from the rolling condition (linear in them)."""
     q = rng.uniform(-1.0, 1.0, 5)
     u = np.r_[rng.uniform(-2.0, 2.0, 3), 0.0, 0.0]
-    subs = {**DISK, **dict(zip(kane.q, q)), **dict(zip(kane.u[:3], u[:3]))}
+    subs = {**DISK, **dict(zip(kane.q, q, strict=True)), **dict(zip(kane.u[:3], u[:3], strict=True))}
     B, c = sp.linear_eq_to_matrix([e.subs(subs) for e in rolling], kane.u[3:])
     u[3:] = np.linalg.solve(np.array(B, float), np.array(c, float).ravel())
     return q, u
@@ -138,7 +138,7 @@ def test_pinned_double_pendulum_accelerations_equal_sympys():
     rng = np.random.default_rng(5)
     for _ in range(4):
         q, v = _pendulum_state(rng)
-        subs = {**params, **dict(zip(method.q, q)), **dict(zip(method.u, v))}
+        subs = {**params, **dict(zip(method.q, q, strict=True)), **dict(zip(method.u, v, strict=True))}
         full = np.linalg.solve(_numeric(method.mass_matrix_full, subs), _numeric(method.forcing_full, subs).ravel())
         expected = full[2:4]  # [q̇, q̈, λ]
         got = imported.model.step(0.0, q, v).a
