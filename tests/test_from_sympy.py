@@ -232,3 +232,42 @@ def test_a_system_gives_the_same_accelerations_as_its_lagrange_twin():
     assert [c.name for c in imported.constraints] == ["holonomic[0]"]
     expected = twin.model.step(0.0, q, v).a
     assert np.linalg.norm(imported.model.step(0.0, q, v).a - expected) <= 1e-12 * np.linalg.norm(expected)
+
+
+def test_kanes_velocity_rows_that_differentiate_a_configuration_constraint_are_not_doubled():
+    """Kane lists ġ = 0 among its velocity constraints: the import keeps it once, as ``Holonomic``."""
+    q1, q2, u1, u2 = me.dynamicsymbols("q1 q2 u1 u2")
+    N = me.ReferenceFrame("N")
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P1 = O.locatenew("P1", L1 * (sp.sin(q1) * N.x - sp.cos(q1) * N.y))
+    P2 = P1.locatenew("P2", L2 * (sp.sin(q2) * N.x - sp.cos(q2) * N.y))
+    P1.set_vel(N, P1.pos_from(O).dt(N).subs({q1.diff(T): u1}))
+    P2.set_vel(N, P2.pos_from(O).dt(N).subs({q1.diff(T): u1, q2.diff(T): u2}))
+    tip = P2.pos_from(O).dot(N.y) + H
+    kane = me.KanesMethod(
+        N,
+        q_ind=[q1],
+        u_ind=[u1],
+        kd_eqs=[q1.diff(T) - u1, q2.diff(T) - u2],
+        q_dependent=[q2],
+        configuration_constraints=[tip],
+        u_dependent=[u2],
+        velocity_constraints=[tip.diff(T).subs({q1.diff(T): u1, q2.diff(T): u2})],
+        bodies=[me.Particle("p1", P1, 1.0), me.Particle("p2", P2, 0.7)],
+        forcelist=[(P1, -G * 1.0 * N.y), (P2, -G * 0.7 * N.y)],
+    )
+    kane.kanes_equations()
+    imported = gp.from_sympy(kane)
+    assert [c.name for c in imported.constraints] == ["holonomic[0]"]
+    q, v = _pendulum_state(np.random.default_rng(13))
+    expected = _sympy_acceleration(kane, q, v, {})
+    assert np.linalg.norm(imported.model.step(0.0, q, v).a - expected) <= 1e-12 * np.linalg.norm(expected)
+
+
+def test_without_sympy_the_extra_is_named(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "sympy.physics.mechanics", None)
+    with pytest.raises(gp.GaussppError, match=r"pip install 'gausspp\[sympy\]'"):
+        gp.from_sympy(object())
