@@ -160,6 +160,8 @@ def test_a_realization_is_chosen_by_constraint_name():
     method, params = _pinned_double_pendulum()
     imported = gp.from_sympy(method, parameters=params, realization={"holonomic[0]": "ideal"})
     assert isinstance(imported.constraints[0].realization, gp.Ideal)
+    with pytest.raises(gp.InputError, match="tip"):
+        gp.from_sympy(method, parameters=params, realization={"tip": "ideal"})
 
 
 # -- (c) errors ------------------------------------------------------------------------------------

@@ -228,6 +228,11 @@ def _constraints(
         name = f"nonholonomic[{i}]"
         fn = _velocity_fn(parts, values, parts.velocity[row], me)
         out.append(Constraint(fn, name=name, realization=_pick(realization, name)))
+    unknown = sorted(set(realization) - {c.name for c in out}) if isinstance(realization, Mapping) else []
+    if unknown:
+        raise InputError(
+            f"from_sympy: realization names {unknown} match no constraint; the constraints are {[c.name for c in out]}"
+        )
     return out
 
 
