@@ -31,6 +31,7 @@ from .errors import (
     UnknownNameError,
 )
 from .model.constraints import Constraint, Holonomic, Unilateral
+from .model.from_sympy import SympyModel, from_sympy
 from .model.mechanism import Lagrangian, MassMatrix, Mechanism, RigidBody
 from .model.model import Model
 from .model.realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
@@ -62,6 +63,7 @@ __all__ = [
     "Constraint",
     "CrossCheck",
     "Force",
+    "from_sympy",
     "GaussppError",
     "GaussppWarning",
     "Holonomic",
@@ -91,6 +93,7 @@ __all__ = [
     "StepProblem",
     "StepResult",
     "SweepLogWarning",
+    "SympyModel",
     "SymbolicError",
     "Trajectory",
     "UnknownNameError",
