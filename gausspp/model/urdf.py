@@ -115,7 +115,9 @@ def from_urdf(
     names = [name for name, kind in movable if kind in ONE_DOF] if joints is None else list(joints)
     for name in names:
         if name not in kinds:
-            raise UnknownNameError(f"from_urdf: joint {name!r} is not a movable joint of {path}; known: {sorted(kinds)}")
+            raise UnknownNameError(
+                f"from_urdf: joint {name!r} is not a movable joint of {path}; known: {sorted(kinds)}"
+            )
         if kinds[name] not in ONE_DOF:
             raise InputError(f"from_urdf: joint {name!r} is {kinds[name]!r}; only {', '.join(ONE_DOF)} joints are read")
     if not names:
