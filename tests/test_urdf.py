@@ -233,3 +233,32 @@ def test_adam_bug_prismatic_placement(tmp_path: Path) -> None:
     mech = gp.from_urdf(str(path))
     ours = np.array(ca.Function("p", [mech.q], [gp.frame_position(mech, "l2")])(q)).ravel()
     np.testing.assert_allclose(ours, right, rtol=TOL, atol=TOL)
+
+
+# -- item 3: servo inverse dynamics on the UR5 -------------------------------------------------------------------
+def test_ur5_tool_path_by_joint_torques_is_pinocchio_inverse_dynamics() -> None:
+    """The tool follows ``p(t)`` (3 coordinates) by the 6 joint torques: redundant, least compulsion (QP).
+
+    The torques along the computed motion are Pinocchio's RNEA of that motion (1e-9 relative), and the
+    integral principle accepts the motion.
+    """
+    path = str(ur5_path())
+    mech = gp.from_urdf(path)
+    q0 = np.array([0.1, -1.2, 1.5, -0.8, -1.4, 0.3])
+    p0 = ca.Function("p", [mech.q], [gp.frame_position(mech, "tool0")])(q0)
+    d = ca.DM([0.08, 0.05, -0.04])
+    path_constraint = gp.Holonomic(
+        lambda q, t: gp.frame_position(mech, "tool0", q) - (p0 + (1 - ca.cos(2 * t)) * d),
+        name="tool path",
+        realization=gp.Force(lambda q, v, t: ca.SX.eye(6)),
+    )
+    model = gp.Model(mech, path_constraint)
+    traj = gp.simulate(model, q0, np.zeros(6), 1.0, solver="qp", stabilize="baumgarte")
+    assert traj.status == "success"
+    assert np.abs(traj.g).max() < 1e-8
+    pm = pin.buildModelFromUrdf(path)
+    data = pm.createData()
+    for q, v, a, tau in zip(traj.q, traj.v, traj.a, traj.reaction, strict=True):
+        expected = pin.rnea(pm, data, q, v, a)
+        assert np.linalg.norm(tau - expected) <= 1e-9 * np.linalg.norm(expected)
+    assert gp.verify(model, traj).is_motion
