@@ -35,6 +35,7 @@ from .model.from_sympy import SympyModel, from_sympy
 from .model.mechanism import Lagrangian, MassMatrix, Mechanism, RigidBody
 from .model.model import Model
 from .model.realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
+from .model.urdf import frame_acceleration_bias, frame_jacobian, frame_position, frame_rotation, from_urdf
 from .servo import ServoDiagnosis, ServoTrajectory, replay, servo_diagnosis, simulate_servo
 from .simulation import methods
 from .simulation.drift import Baumgarte
@@ -108,6 +109,11 @@ __all__ = [
     "simulate_servo",
     "qp",
     "crosscheck",
+    "frame_acceleration_bias",
+    "frame_jacobian",
+    "frame_position",
+    "frame_rotation",
+    "from_urdf",
     "realizability",
     "report",
     "scenes",

@@ -1,0 +1,167 @@
+"""URDF robots as mechanisms: ``gp.from_urdf`` and the frame kinematics to write constraints with.
+
+A fixed-base robot with joint coordinates ``q`` (revolute angles, prismatic displacements) moves by
+
+.. math:: A(q)\\,\\ddot q = \\tau(q, v, t) - h(q, v), \\qquad h = C(q, v)\\,v + g(q),
+
+``A`` the composite-rigid-body mass matrix and ``h`` the bias forces (recursive Newton–Euler at zero
+acceleration), with gravity ``g`` along ``−z`` of the base frame. Both come from adam-robotics 0.5.0
+(:mod:`gausspp.model.adam_robot`, an optional extra: ``pip install 'gausspp[robots]'``) as casadi
+expressions; the robot becomes a :class:`~gausspp.MassMatrix` whose energy is
+``½ vᵀ A v + m g z_c(q)`` (``m`` the total mass, ``z_c`` the height of the centre of mass).
+
+A frame's position ``p(q)`` (:func:`frame_position`), translational Jacobian ``J = ∂p/∂q``
+(:func:`frame_jacobian`) and acceleration bias ``J̇ v = ∂(J v)/∂q · v`` (:func:`frame_acceleration_bias`,
+so that ``p̈ = J q̈ + J̇ v``) are casadi expressions of whatever ``q`` (and ``v``) they are given — the
+symbols a constraint's function receives.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from importlib import metadata
+from typing import Any
+
+import casadi as ca
+
+from ..errors import GaussppError, InputError, UnknownNameError
+from .mechanism import MassMatrix
+from .symbolic import evaluate
+
+#: What to install for :func:`from_urdf`.
+EXTRA = "pip install 'gausspp[robots]'"
+#: Joint types that are one coordinate each.
+ONE_DOF = ("revolute", "continuous", "prismatic")
+
+
+class URDFMechanism(MassMatrix):
+    """A fixed-base URDF robot, ``A(q) q̈ = τ − h(q, v)`` (built by :func:`from_urdf`).
+
+    Attributes
+    ----------
+    joint_names : tuple of str
+        The joints, in the order of ``q`` and ``v``.
+    robot : AdamRobot
+        The kinematics and dynamics as casadi expressions (:mod:`gausspp.model.adam_robot`).
+    """
+
+    def __init__(self, robot: Any, joint_names: Sequence[str], g: float, torque: Callable[..., Any] | None) -> None:
+        n = len(joint_names)
+        self.robot = robot
+        self.joint_names = tuple(joint_names)
+        self.g = float(g)
+
+        def applied(q: Any, v: Any, t: Any) -> Any:
+            if torque is None:
+                return ca.SX.zeros(n)
+            return evaluate(torque, (q, v, t), (n, 1), "torque(q, v, t)")
+
+        def energy(q: Any, v: Any, t: Any) -> Any:
+            return 0.5 * ca.dot(v, robot.mass_matrix(q) @ v) + robot.mass * self.g * robot.com(q)[2]
+
+        super().__init__(
+            n,
+            A=lambda q, t: robot.mass_matrix(q),
+            f=lambda q, v, t: applied(q, v, t) - robot.bias(q, v),
+            energy=energy,
+            nonconservative=applied,
+        )
+
+
+def _robot_class() -> Any:
+    """adam's adapter class, or a project error naming the extra to install (or the version to pin)."""
+    try:
+        found = metadata.version("adam-robotics")
+    except metadata.PackageNotFoundError:
+        raise GaussppError(f"from_urdf needs adam-robotics with casadi: {EXTRA}") from None
+    from . import adam_robot
+
+    if found != adam_robot.ADAM_VERSION:
+        raise GaussppError(
+            f"from_urdf is written for adam-robotics {adam_robot.ADAM_VERSION} (its workarounds depend on it), "
+            f"found {found!r}; {EXTRA}"
+        )
+    return adam_robot
+
+
+def from_urdf(
+    path: str,
+    joints: Sequence[str] | None = None,
+    g: float = 9.81,
+    torque: Callable[..., Any] | None = None,
+) -> URDFMechanism:
+    """A fixed-base robot from a URDF file: ``A(q)``, bias forces, gravity, joint names.
+
+    Parameters
+    ----------
+    path : str
+        The URDF file (``package://`` mesh addresses do not matter: only the inertias and joints are read).
+    joints : sequence of str, optional
+        The joints that move, in the order of ``q``; default every revolute, continuous and prismatic
+        joint in the file's order. Other joints are held at zero.
+    g : float
+        Gravity's magnitude along ``−z`` of the base frame (gausspp's convention, 9.81).
+    torque : callable ``(q, v, t) -> (n,)``, optional
+        Applied joint torques (friction, springs, a known actuation); none by default.
+
+    Returns
+    -------
+    URDFMechanism
+        A :class:`~gausspp.MassMatrix` with ``joint_names``.
+    """
+    adam_robot = _robot_class()
+    movable = adam_robot.movable_joints(str(path))
+    kinds = dict(movable)
+    names = [name for name, kind in movable if kind in ONE_DOF] if joints is None else list(joints)
+    for name in names:
+        if name not in kinds:
+            raise UnknownNameError(
+                f"from_urdf: joint {name!r} is not a movable joint of {path}; known: {sorted(kinds)}"
+            )
+        if kinds[name] not in ONE_DOF:
+            raise InputError(f"from_urdf: joint {name!r} is {kinds[name]!r}; only {', '.join(ONE_DOF)} joints are read")
+    if not names:
+        raise InputError(f"from_urdf: {path} has no revolute, continuous or prismatic joint")
+    robot = adam_robot.AdamRobot(str(path), names, float(g))
+    return URDFMechanism(robot, names, g, torque)
+
+
+def _robot(mech: Any, frame: str) -> Any:
+    robot = getattr(mech, "robot", None)
+    if not isinstance(mech, URDFMechanism) or robot is None:
+        raise InputError(f"mech must be a mechanism from gp.from_urdf, got {type(mech).__name__}")
+    if frame not in robot.frames:
+        raise UnknownNameError(f"frame {frame!r} is not a link or frame of the robot; known: {sorted(robot.frames)}")
+    return robot
+
+
+def frame_position(mech: URDFMechanism, frame: str, q: Any = None) -> ca.SX:
+    """Position ``p(q)`` of a link or frame's origin in the base frame, a ``(3, 1)`` casadi expression.
+
+    ``q`` defaults to ``mech.q``; inside a constraint pass the ``q`` the constraint receives.
+    """
+    robot = _robot(mech, frame)
+    return robot.pose(frame, mech.q if q is None else q)[:3, 3]
+
+
+def frame_rotation(mech: URDFMechanism, frame: str, q: Any = None) -> ca.SX:
+    """Rotation matrix (frame → base) of a link or frame, a ``(3, 3)`` casadi expression."""
+    robot = _robot(mech, frame)
+    return robot.pose(frame, mech.q if q is None else q)[:3, :3]
+
+
+def frame_jacobian(mech: URDFMechanism, frame: str, q: Any = None) -> ca.SX:
+    """Translational Jacobian ``J(q) = ∂p/∂q`` of a frame's origin, ``(3, n)``: ``ṗ = J v``."""
+    qs = mech.q
+    J = ca.jacobian(frame_position(mech, frame, qs), qs)
+    return J if q is None else ca.substitute(J, qs, q)
+
+
+def frame_acceleration_bias(mech: URDFMechanism, frame: str, q: Any = None, v: Any = None) -> ca.SX:
+    """``J̇ v = ∂(J v)/∂q · v``, ``(3, 1)``: the frame origin's acceleration is ``p̈ = J q̈ + J̇ v``."""
+    qs, vs = mech.q, mech.v
+    Jv = frame_jacobian(mech, frame) @ vs
+    bias = ca.jacobian(Jv, qs) @ vs
+    if q is None and v is None:
+        return bias
+    return ca.substitute(bias, ca.vertcat(qs, vs), ca.vertcat(mech.q if q is None else q, vs if v is None else v))
