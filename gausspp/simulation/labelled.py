@@ -127,8 +127,8 @@ def _save_npz(traj: Any, path: Path, attrs: dict[str, Any]) -> None:
     """Every field array as it is, the labels as string arrays ``label_<axis>``, settings as 0-d arrays."""
     labels = {_LABEL_KEY + axis: np.asarray(names, dtype=str) for axis, names in traj.labels.as_dict().items()}
     fields = {key: np.asarray(getattr(traj, key)) for key in ("t", *DIMS)}
-    extra = {**settings(traj), **attrs}
-    np.savez(path, energy_balance=energy_balance(traj), **fields, **labels, **extra)
+    stored: dict[str, Any] = {"energy_balance": energy_balance(traj), **fields, **labels, **settings(traj), **attrs}
+    np.savez(path, **stored)
 
 
 def _save_nc(traj: Any, path: Path, attrs: dict[str, Any]) -> None:
