@@ -40,7 +40,7 @@ from .servo import ServoDiagnosis, ServoTrajectory, replay, servo_diagnosis, sim
 from .simulation import methods
 from .simulation.drift import Baumgarte
 from .simulation.simulate import simulate
-from .simulation.trajectory import Trajectory
+from .simulation.trajectory import Trajectory, load_trajectory
 from .step import qp, realizability
 from .step.problem import StepProblem, solve
 from .step.results import StepResult
@@ -101,6 +101,7 @@ __all__ = [
     "Unilateral",
     "Vakonomic",
     "Verification",
+    "load_trajectory",
     "methods",
     "plot",
     "replay",

@@ -109,7 +109,7 @@ def test_reaction_over_time(two_masses: dict[str, Any], tmp_path: Path) -> None:
     fig = plot.reaction_over_time({"rod": two_masses["rod_path"], "servo": two_masses["servo_path"]})
     u_ax, z_ax, m_ax = fig.axes
     assert len(fig.axes) == 3
-    assert labelled(u_ax) == ["$u_{1}$ (rod)", "$u_{1}$ (servo)"]
+    assert labelled(u_ax) == ["rod (rod)", "rod (servo)"]  # the unknown named by its constraint (the model's name)
     np.testing.assert_array_equal(z_ax.get_lines()[0].get_ydata(), two_masses["rod_path"].compulsion)
     assert m_ax.get_yscale() == "log" and len(m_ax.get_lines()) == 3  # two margins and the warning level
     saved(fig, tmp_path / "reaction.png")
@@ -118,7 +118,7 @@ def test_reaction_over_time(two_masses: dict[str, Any], tmp_path: Path) -> None:
 def test_reaction_over_time_flywheel_shows_the_state(tmp_path: Path) -> None:
     gyro = gp.scenes.get("gyrostat")
     fig = plot.reaction_over_time(tight(gyro, 1.0, 21))
-    assert labelled(fig.axes[0]) == ["$u_{1}$", "state $\\lambda_{1}$"]
+    assert labelled(fig.axes[0]) == ["(ω, l) = 0", "state (ω, l) = 0"]  # u and λ named by their constraint
     saved(fig, tmp_path / "reaction_gyrostat.png")
 
 

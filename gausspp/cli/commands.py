@@ -154,7 +154,8 @@ def _simulate(
 
 
 def run(args: argparse.Namespace) -> int:
-    """Simulate one scene, print a summary, optionally write the trajectory (NPZ, CSV, PNG)."""
+    """Simulate one scene, print a summary, optionally write the trajectory (a directory: NPZ, CSV, PNG; or one
+    ``.npz``/``.nc`` file, :func:`gausspp.studies.output.write_trajectory`)."""
     params = parse_params(args.scene, args.param)
     scene = build(args.scene, params)
     traj, wall, dt = _simulate(args, scene, f"simulating {args.scene}")

@@ -121,8 +121,10 @@ _RUN = """\
 Simulate SCENE and print a summary: status, steps, final state, constraint
 residual, energy balance, realizability margin (and the error against the
 exact motion where the scene knows it). With --out DIR, write DIR/SCENE.npz
-(every array and the run's metadata), DIR/SCENE.csv and DIR/SCENE.png. A run
-that fails midway still writes what it computed, then exits with 1.
+(every array, the model's names, the run's settings), DIR/SCENE.csv and
+DIR/SCENE.png; with --out FILE.npz or FILE.nc (netCDF, needs gausspp[data]),
+that one file. Both read back by gausspp.load_trajectory (then gp.verify). A
+run that fails midway still writes what it computed, then exits with 1.
 
 examples:
   gausspp run two-masses --param realization=servo --param F=1
@@ -229,7 +231,12 @@ def _add_run(sub: Any, common: Parser) -> None:
         default=None,
         help="drift control (default: the scene's own, e.g. the saturated crane's feedback; else none)",
     )
-    r.add_argument("--out", metavar="DIR", help="write the trajectory to DIR (NPZ, CSV and, with matplotlib, PNG)")
+    r.add_argument(
+        "--out",
+        metavar="PATH",
+        help="write the trajectory: to the directory PATH (NPZ, CSV and, with matplotlib, PNG), or to one file "
+        "PATH ending .npz or .nc (netCDF); read back by gausspp.load_trajectory",
+    )
 
 
 def _add_verify(sub: Any, common: Parser) -> None:

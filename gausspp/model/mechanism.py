@@ -42,7 +42,9 @@ class Mechanism(ABC):
        energy balance ``dE/dt = v·(F_nc + R)``), or ``None`` if not known;
 
     and implement :meth:`lagrange_rows`, the Lagrange derivative of an affine function.
-    Override :meth:`normalize` where ``q`` lives on a manifold (unit quaternions).
+    Override :meth:`normalize` where ``q`` lives on a manifold (unit quaternions). A front end that
+    knows its coordinates' and velocities' names sets ``coordinate_names`` / ``velocity_names``
+    (tuples of ``nq`` / ``nv`` strings); results carry them (:class:`gausspp.Trajectory`).
     """
 
     q: ca.SX
@@ -54,6 +56,8 @@ class Mechanism(ABC):
     energy: ca.SX | None
     F_nc: ca.SX | None = None
     symmetric_by_construction: bool = True
+    coordinate_names: tuple[str, ...] | None = None
+    velocity_names: tuple[str, ...] | None = None
 
     def normalize(self, q: ca.SX) -> ca.SX:
         """Bring ``q`` back onto the configuration manifold (identity for coordinates in Rⁿ)."""

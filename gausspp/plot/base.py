@@ -48,6 +48,13 @@ def labels(given: Sequence[str] | None, n: int, symbol: str) -> list[str]:
     return out
 
 
+def carried_names(traj: Any, axis: str, n: int) -> list[str] | None:
+    """The names ``traj`` carries from its model along ``axis`` (its ``labels``,
+    :class:`gausspp.simulation.labels.Labels`), or None where it carries none (or not ``n`` of them)."""
+    names = tuple(getattr(getattr(traj, "labels", None), axis, ()))
+    return [str(s) for s in names] if len(names) == n and n else None
+
+
 def suffix(name: str, traj: Any = None) -> str:
     """`` (name, failed at t=…)`` for a legend entry; empty for an unnamed successful run."""
     failed = traj is not None and getattr(traj, "status", "success") != "success"

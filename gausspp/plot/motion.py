@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ShapeError
-from .base import MARGIN_WARN, STYLES, as_runs, labels, legend, pyplot, suffix
+from .base import MARGIN_WARN, STYLES, as_runs, carried_names, labels, legend, pyplot, suffix
 
 
 def _same_sizes(runs: Mapping[str, Any], phase: bool) -> tuple[int, int]:
@@ -48,7 +48,7 @@ def trajectory(
     phase : bool
         Add the phase portrait; needs ``nq == nv`` (not a rigid body's quaternion and ``ω``).
     q_labels, v_labels : sequence of str, optional
-        Names of the components (default ``q₁…``, ``v₁…``).
+        Names of the components (default: the names the first run carries from its model, else ``q₁…``, ``v₁…``).
     title : str, optional
 
     Returns
@@ -59,6 +59,9 @@ def trajectory(
     plt = pyplot()
     runs = as_runs(traj, "trajectories")
     nq, nv = _same_sizes(runs, phase)
+    first = next(iter(runs.values()))
+    q_labels = q_labels if q_labels is not None else carried_names(first, "coordinate", nq)
+    v_labels = v_labels if v_labels is not None else carried_names(first, "velocity", nv)
     ql, vl = labels(q_labels, nq, "q"), labels(v_labels, nv, "v")
     ncols = 3 if phase else 2
     fig, axes = plt.subplots(1, ncols, figsize=(4.8 * ncols, 4.0), layout="constrained")
@@ -90,10 +93,15 @@ def _reaction_panels(axes: Any, runs: Mapping[str, Any], colors: Any) -> float:
     lowest = 1.0
     for r, (name, tr) in enumerate(runs.items()):
         ls, sfx = STYLES[r % len(STYLES)], suffix(name, tr)
+        m, n_lam = tr.u.shape[1], tr.lam.shape[1]
+        ul, ll = (
+            labels(carried_names(tr, "unknown", m), m, "u"),
+            labels(carried_names(tr, "lam_state", n_lam), n_lam, "\\lambda"),
+        )
         for j in range(tr.u.shape[1]):
-            axes[0].plot(tr.t, tr.u[:, j], ls, color=colors(j % 10), label=f"$u_{{{j + 1}}}${sfx}")
+            axes[0].plot(tr.t, tr.u[:, j], ls, color=colors(j % 10), label=f"{ul[j]}{sfx}")
         for j in range(tr.lam.shape[1]):
-            state = f"state $\\lambda_{{{j + 1}}}${sfx}"
+            state = f"state {ll[j]}{sfx}"
             axes[0].plot(tr.t, tr.lam[:, j], ls, color=colors(j % 10), lw=0.8, alpha=0.5, label=state)
         color = "k" if len(runs) == 1 else colors(r % 10)
         axes[1].plot(tr.t, tr.compulsion, ls, color=color, label=f"Z{sfx}")

@@ -23,6 +23,7 @@ from ..errors import GaussppError, IntegrationError, NonFiniteError, Realizabili
 from ..model.model import Model
 from ..step.realizability import stacked_margins
 from .contacts import gaps, phase_step
+from .labels import model_labels
 from .margins import SMALL_MARGIN, audit
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
@@ -177,6 +178,7 @@ def _trajectory(model: Model, samples: Samples, cols: Columns, margin: np.ndarra
         saturated=cols.saturated[:n],
         events=samples.events,
         gap=contact_gaps(model, samples.t[:n], y),
+        labels=model_labels(model),
     )
 
 

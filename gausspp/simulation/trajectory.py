@@ -2,10 +2,15 @@
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from . import labelled
+from .labels import Labels
 
 
 @dataclass(frozen=True)
@@ -94,6 +99,7 @@ class Trajectory:
     gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     lane: str = ""
     route: str = ""
+    labels: Labels = field(default_factory=Labels)
 
     @property
     def success(self) -> bool:
@@ -116,5 +122,41 @@ class Trajectory:
         """Largest ``|Φ|`` and ``|g|`` over the trajectory."""
         return float(max(np.max(np.abs(self.residual), initial=0.0), np.max(np.abs(self.g), initial=0.0)))
 
+    def to_xarray(self) -> Any:
+        """The trajectory as an ``xarray.Dataset`` (needs ``pip install 'gausspp[data]'``).
+
+        Dims ``time`` × ``coordinate`` (``q``), ``velocity`` (``v``, ``a``, ``reaction``), ``lam_state``,
+        ``unknown`` (``u``, ``saturated``), ``row`` (``residual``, ``g``), ``contact_row`` (``contact_force``,
+        ``gap``), each named from the model (``q0``, ``q1``… where the model has no names); every recorded
+        array a variable (with ``energy_balance``), the run's settings (method, solver, lane, route, status,
+        message, steps, events as JSON) attributes.
+        """
+        return labelled.to_xarray(self)
+
+    def to_pandas(self) -> Any:
+        """The trajectory as a ``pandas.DataFrame`` indexed by time ``t``: columns ``q[name]``, ``v[name]``,
+        ``u[name]``, ``residual[row]`` …, and ``margin``, ``compulsion``, ``energy`` …; settings in ``.attrs``
+        (needs ``pip install 'gausspp[data]'``)."""
+        return labelled.to_pandas(self)
+
+    def save(self, path: str | os.PathLike[str], attrs: dict[str, Any] | None = None) -> Path:
+        """Write the trajectory to ``path``: ``.npz`` (numpy only) or ``.nc`` (netCDF, needs
+        ``gausspp[data]``), chosen by the suffix; ``attrs`` (strings, numbers) are stored too.
+        :func:`load_trajectory` reads it back, so that the run can be verified later (:func:`gausspp.verify`)."""
+        return labelled.save(self, path, attrs)
+
     def __len__(self) -> int:
         return int(self.t.size)
+
+
+def load_trajectory(path: str | os.PathLike[str]) -> Trajectory:
+    """The trajectory written by :meth:`Trajectory.save` to ``path`` (``.npz`` or ``.nc``), arrays, names
+    and settings; fields the file lacks take their defaults."""
+    stored = labelled.read(path, Trajectory.__dataclass_fields__)
+    defaults: dict[str, Any] = dict(status="success", message="", method="", solver="", steps=0, rhs_evaluations=0)
+    n = len(stored["t"])
+    for key in ("q", "v", "lam", "a", "u", "reaction", "residual", "g"):
+        defaults[key] = np.zeros((n, 0))
+    for key in ("compulsion", "margin", "energy", "work_reaction", "work_forces"):
+        defaults[key] = np.full(n, np.nan)
+    return Trajectory(**{**defaults, **stored})

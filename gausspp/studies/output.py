@@ -1,5 +1,6 @@
-"""A trajectory written to files: ``<scene>.npz`` (every array and the run's metadata), ``<scene>.csv``
-(named columns) and, with matplotlib, ``<scene>.png`` (q(t) and v(t))."""
+"""A trajectory written to files: ``<scene>.npz`` (:meth:`gausspp.Trajectory.save`'s format: every array, the
+model's names, the run's settings, the scene and its parameters), ``<scene>.csv`` (named columns) and, with
+matplotlib, ``<scene>.png`` (q(t) and v(t)); or one file ``.npz`` / ``.nc`` (netCDF) in that format."""
 
 from __future__ import annotations
 
@@ -12,13 +13,9 @@ import numpy as np
 
 from .. import plot, scenes
 from ..errors import GaussppError
+from ..simulation.labelled import energy_balance
 from ..simulation.trajectory import Trajectory
 from .tables import label
-
-
-def energy_balance(traj: Trajectory) -> np.ndarray:
-    """``ΔE − W_reaction − W_forces`` at every sample (empty for an empty trajectory)."""
-    return traj.energy_balance() if len(traj) else np.zeros(0)
 
 
 def columns(traj: Trajectory) -> tuple[list[str], np.ndarray]:
@@ -38,14 +35,22 @@ def columns(traj: Trajectory) -> tuple[list[str], np.ndarray]:
     return names, np.hstack(blocks) if traj.t.size else np.zeros((0, len(names)))
 
 
+#: The suffixes that make ``--out`` one trajectory file rather than a directory.
+FILE_SUFFIXES = (".npz", ".nc")
+
+
 def write_trajectory(traj: Trajectory, scene: scenes.Scene, params: dict[str, Any], out: Path) -> list[Path]:
-    """``<scene>.npz`` (every array and the run's metadata), ``<scene>.csv`` and, with matplotlib, ``<scene>.png``."""
+    """``out`` a ``.npz`` or ``.nc`` file: the trajectory in :meth:`~gausspp.Trajectory.save`'s format (with the
+    scene and its parameters), read back by :func:`gausspp.load_trajectory`. Otherwise ``out`` is a directory:
+    ``<scene>.npz`` (the same format), ``<scene>.csv`` and, with matplotlib, ``<scene>.png``."""
+    attrs = dict(scene=scene.name, params=json.dumps(params, default=repr))
     try:
+        if out.suffix.lower() in FILE_SUFFIXES:
+            out.parent.mkdir(parents=True, exist_ok=True)
+            return [traj.save(out, attrs)]
         out.mkdir(parents=True, exist_ok=True)
         base = out / scene.name
-        arrays = {k: np.asarray(getattr(traj, k)) for k in traj.__dataclass_fields__ if k not in ("status", "message")}
-        meta = dict(scene=scene.name, params=json.dumps(params, default=repr), status=traj.status, message=traj.message)
-        np.savez(base.with_suffix(".npz"), energy_balance=energy_balance(traj), **arrays, **meta)  # type: ignore[arg-type]
+        traj.save(base.with_suffix(".npz"), attrs)
         names, data = columns(traj)
         np.savetxt(base.with_suffix(".csv"), data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
         files = [base.with_suffix(".npz"), base.with_suffix(".csv")]
