@@ -154,6 +154,8 @@ def test_pinned_double_pendulum_trajectory_equals_the_hand_written_model():
     scale = 1.0 + np.abs(b.q).max()
     assert np.abs(a.q - b.q).max() <= 1e-9 * scale
     assert np.abs(a.v - b.v).max() <= 1e-9 * (1.0 + np.abs(b.v).max())
+    names = gp.from_sympy(method, parameters=params).coordinates
+    assert a.labels.coordinate == names and b.labels.coordinate != names  # sympy's names reach the results
 
 
 def test_a_realization_is_chosen_by_constraint_name():

@@ -262,3 +262,4 @@ def test_ur5_tool_path_by_joint_torques_is_pinocchio_inverse_dynamics() -> None:
         expected = pin.rnea(pm, data, q, v, a)
         assert np.linalg.norm(tau - expected) <= 1e-9 * np.linalg.norm(expected)
     assert gp.verify(model, traj).is_motion
+    assert traj.labels.coordinate == mech.joint_names  # the URDF's joint names reach the results

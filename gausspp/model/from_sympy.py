@@ -110,9 +110,10 @@ def from_sympy(
     parts = _parts(source, me)
     values = {symbol: float(value) for symbol, value in (parameters or {}).items()}
     mechanism = _mechanism(parts, values, me)
+    names = tuple(str(getattr(qi, "func", qi)) for qi in parts.q)
+    mechanism.coordinate_names, mechanism.velocity_names = names, tuple(parts.speed_names)  # names in results
     constraints = _constraints(parts, values, mechanism, me, realization)
     model = Model(mechanism, constraints, **model_options) if constraints else None
-    names = tuple(str(getattr(qi, "func", qi)) for qi in parts.q)
     return SympyModel(model, mechanism, tuple(constraints), names, tuple(parts.speed_names))
 
 

@@ -49,6 +49,7 @@ class URDFMechanism(MassMatrix):
         n = len(joint_names)
         self.robot = robot
         self.joint_names = tuple(joint_names)
+        self.coordinate_names = self.velocity_names = self.joint_names  # names in results and plots
         self.g = float(g)
 
         def applied(q: Any, v: Any, t: Any) -> Any:
