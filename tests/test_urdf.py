@@ -263,3 +263,44 @@ def test_ur5_tool_path_by_joint_torques_is_pinocchio_inverse_dynamics() -> None:
         assert np.linalg.norm(tau - expected) <= 1e-9 * np.linalg.norm(expected)
     assert gp.verify(model, traj).is_motion
     assert traj.labels.coordinate == mech.joint_names  # the URDF's joint names reach the results
+
+
+def _servo_check(path: str, coords: list[int], q0: np.ndarray, solver: str) -> None:
+    """The tip's ``coords`` follow ``p₀ + (1 − cos 2t) d`` by every joint's torque; RNEA and verify agree."""
+    mech = gp.from_urdf(path)
+    n = mech.nv
+    tip = ca.Function("p", [mech.q], [gp.frame_position(mech, "tip")[coords]])
+    p0, d = tip(q0), ca.DM([0.06, -0.04, 0.05][: len(coords)])
+    path_constraint = gp.Holonomic(
+        lambda q, t: gp.frame_position(mech, "tip", q)[coords] - (p0 + (1 - ca.cos(2 * t)) * d),
+        name="tip path",
+        realization=gp.Force(lambda q, v, t: ca.SX.eye(n)),
+    )
+    model = gp.Model(mech, path_constraint)
+    record = np.linspace(0.0, 1.0, 801)
+    traj = gp.simulate(model, q0, np.zeros(n), 1.0, solver=solver, stabilize="baumgarte", record=record)
+    assert traj.status == "success"
+    assert np.abs(traj.g).max() < 1e-8
+    pm = pin.buildModelFromUrdf(path)
+    data = pm.createData()
+    for q, v, a, tau in zip(traj.q, traj.v, traj.a, traj.reaction, strict=True):
+        expected = pin.rnea(pm, data, q, v, a)
+        assert np.linalg.norm(tau - expected) <= 1e-9 * np.linalg.norm(expected)
+    assert gp.verify(model, traj).is_motion
+    assert traj.labels.coordinate == mech.joint_names
+
+
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+def test_two_joint_arm_tip_path_by_joint_torques_is_pinocchio_inverse_dynamics(tmp_path: Path, solver: str) -> None:
+    """Two joints, two path coordinates (the tip's x and y): ``S = I₂`` square, one torque for the path."""
+    path = tmp_path / "two.urdf"
+    path.write_text(two_joint_urdf())
+    _servo_check(str(path), [0, 1], np.array([0.4, 0.9]), solver)
+
+
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+def test_prismatic_arm_tip_path_by_joint_forces_is_pinocchio_inverse_dynamics(tmp_path: Path, solver: str) -> None:
+    """Revolute, prismatic, revolute: the tip's full position by two torques and the slider's force."""
+    path = tmp_path / "slider.urdf"
+    path.write_text(prismatic_urdf())
+    _servo_check(str(path), [0, 1, 2], np.array([0.4, 0.3, 0.9]), solver)
