@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import warnings
 from importlib import metadata
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 import pytest
+from scipy.optimize import brentq
 
 import gausspp as gp
 from gausspp.errors import GaussppError, UnknownNameError
@@ -263,3 +265,137 @@ def test_ur5_tool_path_by_joint_torques_is_pinocchio_inverse_dynamics() -> None:
         assert np.linalg.norm(tau - expected) <= 1e-9 * np.linalg.norm(expected)
     assert gp.verify(model, traj).is_motion
     assert traj.labels.coordinate == mech.joint_names  # the URDF's joint names reach the results
+
+
+def _servo_check(path: str, coords: list[int], q0: np.ndarray, solver: str) -> None:
+    """The tip's ``coords`` follow ``p₀ + (1 − cos 2t) d`` by every joint's torque; RNEA and verify agree."""
+    mech = gp.from_urdf(path)
+    n = mech.nv
+    tip = ca.Function("p", [mech.q], [gp.frame_position(mech, "tip")[coords]])
+    p0, d = tip(q0), ca.DM([0.06, -0.04, 0.05][: len(coords)])
+    path_constraint = gp.Holonomic(
+        lambda q, t: gp.frame_position(mech, "tip", q)[coords] - (p0 + (1 - ca.cos(2 * t)) * d),
+        name="tip path",
+        realization=gp.Force(lambda q, v, t: ca.SX.eye(n)),
+    )
+    model = gp.Model(mech, path_constraint)
+    record = np.linspace(0.0, 1.0, 801)
+    traj = gp.simulate(model, q0, np.zeros(n), 1.0, solver=solver, stabilize="baumgarte", record=record)
+    assert traj.status == "success"
+    assert np.abs(traj.g).max() < 1e-8
+    pm = pin.buildModelFromUrdf(path)
+    data = pm.createData()
+    for q, v, a, tau in zip(traj.q, traj.v, traj.a, traj.reaction, strict=True):
+        expected = pin.rnea(pm, data, q, v, a)
+        assert np.linalg.norm(tau - expected) <= 1e-9 * np.linalg.norm(expected)
+    assert gp.verify(model, traj).is_motion
+    assert traj.labels.coordinate == mech.joint_names
+
+
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+def test_two_joint_arm_tip_path_by_joint_torques_is_pinocchio_inverse_dynamics(tmp_path: Path, solver: str) -> None:
+    """Two joints, two path coordinates (the tip's x and y): ``S = I₂`` square, one torque for the path."""
+    path = tmp_path / "two.urdf"
+    path.write_text(two_joint_urdf())
+    _servo_check(str(path), [0, 1], np.array([0.4, 0.9]), solver)
+
+
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+def test_prismatic_arm_tip_path_by_joint_forces_is_pinocchio_inverse_dynamics(tmp_path: Path, solver: str) -> None:
+    """Revolute, prismatic, revolute: the tip's full position by two torques and the slider's force."""
+    path = tmp_path / "slider.urdf"
+    path.write_text(prismatic_urdf())
+    _servo_check(str(path), [0, 1, 2], np.array([0.4, 0.3, 0.9]), solver)
+
+
+# -- item 3: an underactuated arm (a passive elbow) ---------------------------------------------------------------
+def three_link_urdf() -> str:
+    """A planar arm in the horizontal plane (three joints about ``z``, links 0.5, 0.5 and 0.4 m to the tip)."""
+    joints = ""
+    for name, parent, child, x in (
+        ("shoulder", "base", "l1", 0),
+        ("elbow", "l1", "l2", 0.5),
+        ("wrist", "l2", "l3", 0.5),
+    ):
+        joints += (
+            f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
+            f'<origin xyz="{x} 0 0"/><axis xyz="0 0 1"/>'
+            '<limit effort="100" velocity="10" lower="-3" upper="3"/></joint>'
+        )
+    tip = '<joint name="tip_fixed" type="fixed"><parent link="l3"/><child link="tip"/><origin xyz="0.4 0 0"/></joint>'
+    body = _link("l1") + _link("l2") + _link("l3") + joints + tip
+    return f'<robot name="three"><link name="base"/>{body}<link name="tip"/></robot>'
+
+
+#: The motors: shoulder and wrist (the rows of ``M``, ``D = Mᵀ``); the elbow is passive.
+MOTORS = ca.DM([[1, 0, 0], [0, 0, 1]])
+
+
+def _underactuated(tmp_path: Path) -> tuple[str, object, gp.Model]:
+    path = tmp_path / "three.urdf"
+    path.write_text(three_link_urdf())
+    mech = gp.from_urdf(str(path))
+    tip = ca.Function("p", [mech.q], [gp.frame_position(mech, "tip")[[0, 1]]])
+    p0, d = tip(Q_UNDER), ca.DM([0.05, 0.04])
+    path_constraint = gp.Holonomic(
+        lambda q, t: gp.frame_position(mech, "tip", q)[[0, 1]] - (p0 + (1 - ca.cos(2 * t)) * d),
+        name="tip path",
+        realization=gp.Force(lambda q, v, t: MOTORS),
+    )
+    return str(path), mech, gp.Model(mech, path_constraint)
+
+
+Q_UNDER = np.array([0.3, 0.8, -0.5])
+
+
+def _margin(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray) -> float:
+    """The realizability margin of the direct step at ``(t, q, v)`` (small margins are what is measured here)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gp.RealizabilityWarning)
+        return model.step(t, q, v, solver="direct").margin
+
+
+def test_underactuated_arm_follows_the_path_while_the_margin_holds(tmp_path: Path) -> None:
+    """Two motors, a passive elbow, a tip path of 2 coordinates: ``J A⁻¹ D`` is 2 × 2, the direct route.
+
+    On [0, 0.5] s the margin stays near 0.4, the run succeeds, the torques are Pinocchio's RNEA with a zero
+    elbow torque, and ``gp.verify`` accepts. Continued, the passive elbow is dragged towards a configuration
+    where ``J A⁻¹ D`` is singular: the margin falls towards zero (a RealizabilityWarning) and the integration
+    stops there (t ≈ 0.87 s).
+    """
+    path, _, model = _underactuated(tmp_path)
+    traj = gp.simulate(model, Q_UNDER, np.zeros(3), 0.5, solver="direct", record=np.linspace(0.0, 0.5, 401))
+    assert traj.status == "success"
+    assert np.abs(traj.g).max() < 1e-8
+    margins = [_margin(model, t, q, v) for t, q, v in zip(traj.t, traj.q, traj.v, strict=True)]
+    assert min(margins) > 0.3
+    pm = pin.buildModelFromUrdf(path)
+    data = pm.createData()
+    for q, v, a, tau in zip(traj.q, traj.v, traj.a, traj.reaction, strict=True):
+        expected = pin.rnea(pm, data, q, v, a)
+        assert abs(expected[1]) <= 1e-9 * np.linalg.norm(expected)  # the elbow is passive
+        assert np.linalg.norm(tau - expected) <= 1e-9 * np.linalg.norm(expected)
+    assert gp.verify(model, traj).is_motion
+
+    with pytest.warns(gp.RealizabilityWarning, match="margin"):  # the recording sees the margin go
+        longer = gp.simulate(model, Q_UNDER, np.zeros(3), 1.0, solver="direct", throw=False)
+    assert longer.status != "success" and 0.5 < longer.t[-1] < 1.0
+    assert _margin(model, longer.t[-1], longer.q[-1], longer.v[-1]) < 1e-4  # where it stopped: J A⁻¹ D singular
+
+
+def test_underactuated_arm_singular_where_the_passive_joint_decouples(tmp_path: Path) -> None:
+    """A configuration where ``det(J A⁻¹ D) = 0`` though ``J`` has full rank: the margin vanishes there."""
+    _, mech, model = _underactuated(tmp_path)
+    J = ca.jacobian(gp.frame_position(mech, "tip")[[0, 1]], mech.q)
+    det = ca.Function("det", [mech.q], [ca.det(J @ ca.solve(mech.A, MOTORS.T))])
+    q3 = brentq(lambda x: float(det([0.3, -0.3, x])), -1.5, -0.5, xtol=1e-15)
+    singular = np.array([0.3, -0.3, q3])
+    assert np.linalg.svd(np.array(ca.Function("J", [mech.q], [J])(singular)), compute_uv=False)[-1] > 0.1
+    away = [_margin(model, 0.0, singular + [0, 0, eps], np.zeros(3)) for eps in (1e-2, 1e-4, 1e-6)]
+    assert away[0] > away[1] > away[2] and away[2] < 1e-5  # → 0 as the state nears it
+    try:
+        at = _margin(model, 0.0, singular, np.zeros(3))
+    except gp.RealizabilityError as exc:
+        assert "tip path" in str(exc) and "margin" in str(exc)
+    else:
+        assert at < 1e-9
