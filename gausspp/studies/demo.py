@@ -35,7 +35,7 @@ STEP_CASES: tuple[tuple[str, dict[str, Any]], ...] = (
 )
 
 #: Steps of compiled RK4 per scene in the demo (stiff or fast scenes need more).
-STEPS = {"stiff-chain": 20_000, "andrews": 6_000}
+STEPS = {"stiff-chain": 20_000, "andrews": 4_000}
 
 #: The general-QP rows' horizon where the scene's own (≤ 3 s) costs too much for the demo (each right-hand
 #: side is a Gauss QP solved from Python): the four-bar's redundant rows are there from the start; the crane
