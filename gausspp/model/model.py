@@ -16,8 +16,15 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..errors import FrozenModelError, InputError, MissingMultiplierError, NonFiniteError, ShapeError
-from ..step import checked, data, general_step, manifold
+from ..errors import (
+    FrozenModelError,
+    InputError,
+    MissingMultiplierError,
+    NonFiniteError,
+    RealizabilityError,
+    ShapeError,
+)
+from ..step import checked, data, general_step, manifold, servo_reach
 from ..step import impact as impact_step
 from ..step.data import NO_STAB, StepData
 from ..step.general import GaussSolution
@@ -240,7 +247,10 @@ class Model:
             if result is not None:
                 return result
         t, q, v, lam = self.checked_state(t, q, v, lam)
-        return checked.checked_step(self, t, q, v, lam, solver, backend, refine)
+        try:
+            return checked.checked_step(self, t, q, v, lam, solver, backend, refine)
+        except RealizabilityError as exc:  # a servo the actuators reach only through higher derivatives: say so
+            raise servo_reach.explain(self, exc, t, q, v) from None
 
     def general_step(
         self,

@@ -15,7 +15,7 @@ import numpy as np
 from ..disk_cache import cached_function
 from ..errors import GaussppError, InputError, QPSolveError, RealizabilityError, UnknownNameError
 from ..workspace import workspace
-from . import qp, servo_reach
+from . import qp
 from .checked_call import CheckedCall
 from .data import NO_STAB, evaluate
 from .general_step import solve_at
@@ -163,22 +163,6 @@ def checked_step(
     refine: bool,
 ) -> StepResult:
     """The step on checked inputs (see :meth:`gausspp.Model.step` for the parameters and errors)."""
-    try:
-        return _checked_step(model, t, q, v, lam, solver, backend, refine)
-    except RealizabilityError as exc:  # a servo the actuators reach only through higher derivatives: say so
-        raise servo_reach.explain(model, exc, t, q, v) from None
-
-
-def _checked_step(
-    model: StepModel,
-    t: float,
-    q: np.ndarray,
-    v: np.ndarray,
-    lam: np.ndarray,
-    solver: str,
-    backend: str | qp.QPBackend | None,
-    refine: bool,
-) -> StepResult:
     if model.contacts or model.bounded:
         if solver != "qp":
             raise InputError(
