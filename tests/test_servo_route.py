@@ -141,3 +141,16 @@ def test_the_integral_principle_accepts_the_servo_motion_and_refuses_others(cran
     pushed = gp.replay(scene.model, ServoTrajectory(**{**vars(traj), "forces": traj.forces * (1 + 1e-3)}))
     with pytest.raises(gp.InitialDataError, match="off the constraint"):
         gp.verify(scene.model, pushed)
+
+
+def test_bad_input_to_the_servo_route_is_a_project_error() -> None:
+    scene = gp.scenes.get("spring-chain-servo", n=2)
+    model = scene.model
+    with pytest.raises(gp.ShapeError, match="q has 3 entries, expected 2"):
+        gp.simulate_servo(model, [0.0, 0.0, 0.0], scene.v0, 1.0)
+    with pytest.raises(gp.NonFiniteError, match="v contains NaN"):
+        gp.simulate_servo(model, scene.q0, [np.nan, 0.0], 1.0)
+    with pytest.raises(gp.InputError, match="pole"):
+        gp.simulate_servo(model, scene.q0, scene.v0, 1.0, pole=-1.0)
+    with pytest.raises(gp.NonFiniteError):
+        gp.servo_diagnosis(model, np.inf, scene.q0, scene.v0)
