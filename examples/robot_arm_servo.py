@@ -5,7 +5,8 @@ position ``p(q)`` must follow ``p₀ + (1 − cos 2t) d`` — three coordinates 
 Béghin servo force ``gp.Force`` whose directions are the six joint torques (the identity). Six actuators for three
 path coordinates: the arm is redundant, and Gauss's principle picks, among the torques that keep the tool on its
 path, the motion of least compulsion (the QP route) — the motion the arm would have if the tool were guided by an
-ideal constraint. The model is the scene ``ur5-tool-path`` (gausspp/scenes/ur5_tool_path.py). Nothing holds the three-dimensional self-motion: the wrists swing freely (the printed joint
+ideal constraint. The model is the scene ``ur5-tool-path`` (gausspp/scenes/ur5_tool_path.py).
+Nothing holds the three-dimensional self-motion: the wrists swing freely (the printed joint
 speeds), which is why the move is kept short. The computed torques are then compared with Pinocchio's
 inverse dynamics (RNEA) of the computed motion, and the integral principle checks the motion.
 Needs the robot extras: pip install 'gausspp[robots]' example-robot-data pin

@@ -89,7 +89,8 @@ def test_underactuated_arm_torques_are_pinocchio_inverse_dynamics(tmp_path: Path
         assert abs(rnea[1]) <= 1e-9 * np.linalg.norm(rnea)  # the elbow is passive
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", gp.RealizabilityWarning)
-        margins = [scene.model.step(t, q, v, solver="direct").margin for t, q, v in zip(traj.t, traj.q, traj.v)]
+        states = zip(traj.t, traj.q, traj.v, strict=True)
+        margins = [scene.model.step(t, q, v, solver="direct").margin for t, q, v in states]
     assert min(margins) > 0.3
 
 

@@ -15,7 +15,6 @@ import tempfile
 from pathlib import Path
 from typing import Any
 
-import casadi as ca
 import numpy as np
 
 from ..model.model import Model
