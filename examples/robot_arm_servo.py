@@ -5,7 +5,8 @@ position ``p(q)`` must follow ``p₀ + (1 − cos 2t) d`` — three coordinates 
 Béghin servo force ``gp.Force`` whose directions are the six joint torques (the identity). Six actuators for three
 path coordinates: the arm is redundant, and Gauss's principle picks, among the torques that keep the tool on its
 path, the motion of least compulsion (the QP route) — the motion the arm would have if the tool were guided by an
-ideal constraint. Nothing holds the three-dimensional self-motion: the wrists swing freely (the printed joint
+ideal constraint. The model is the scene ``ur5-tool-path`` (gausspp/scenes/ur5_tool_path.py).
+Nothing holds the three-dimensional self-motion: the wrists swing freely (the printed joint
 speeds), which is why the move is kept short. The computed torques are then compared with Pinocchio's
 inverse dynamics (RNEA) of the computed motion, and the integral principle checks the motion.
 Needs the robot extras: pip install 'gausspp[robots]' example-robot-data pin
@@ -24,31 +25,24 @@ from gausspp import plot
 
 missing = [name for name in ("adam", "pinocchio") if util.find_spec(name) is None]
 try:
-    files = metadata.distribution("example-robot-data").files or []
+    metadata.distribution("example-robot-data")
 except metadata.PackageNotFoundError:
-    missing, files = [*missing, "example-robot-data"], []
+    missing = [*missing, "example-robot-data"]
 if missing:
     print(f"robot_arm_servo needs {', '.join(missing)}: pip install 'gausspp[robots]' example-robot-data pin")
     sys.exit(0)
 import pinocchio as pin  # noqa: E402  (optional: imported once known present)
 
-urdf = next(f for f in files if str(f).endswith("ur_description/urdf/ur5_robot.urdf"))
-path = str(metadata.distribution("example-robot-data").locate_file(urdf))
+from gausspp.scenes.ur5_tool_path import ur5_urdf  # noqa: E402
 
-mech = gp.from_urdf(path)
-q0 = np.array([0.1, -1.2, 1.5, -0.8, -1.4, 0.3])
+scene = gp.scenes.get("ur5-tool-path")  # the tool path p0 + (1 - cos 2t) d, every joint a motor
+model, q0, T = scene.model, scene.q0, scene.t_end  # T = 1.2 s; longer, the free self-motion (below) grows
+mech, d = model.mechanism, np.array(scene.params["d"])  # the tool moves 2|d| ≈ 21 cm out and back in π s
+path = ur5_urdf()
 p0 = np.array(ca.Function("p", [mech.q], [gp.frame_position(mech, "tool0")])(q0)).ravel()
-d = np.array([0.08, 0.05, -0.04])  # the tool moves 2|d| ≈ 21 cm out and back in π s
-tool_path = gp.Holonomic(
-    lambda q, t: gp.frame_position(mech, "tool0", q) - (p0 + (1 - ca.cos(2 * t)) * d),
-    name="tool path",
-    realization=gp.Force(lambda q, v, t: ca.SX.eye(6)),  # every joint is a motor
-)
-model = gp.Model(mech, tool_path)
 start = time.perf_counter()
-T = 1.2  # s; longer, the free self-motion of the redundant arm (below) grows
 samples = np.linspace(0.0, T, 1001)  # dense enough for the integral principle's quintic splines
-traj = gp.simulate(model, q0, np.zeros(6), T, solver="qp", stabilize="baumgarte", record=samples)
+traj = gp.simulate(model, q0, scene.v0, T, solver="qp", stabilize="baumgarte", record=samples)
 wall = time.perf_counter() - start
 
 pm = pin.buildModelFromUrdf(path)

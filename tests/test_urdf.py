@@ -21,18 +21,13 @@ from scipy.optimize import brentq
 
 import gausspp as gp
 from gausspp.errors import GaussppError, UnknownNameError
+from gausspp.scenes.underactuated_arm import MOTORS, Q0, arm_model, link, three_link_urdf
+from gausspp.scenes.ur5_tool_path import tool_path, ur5_urdf
 
 pytest.importorskip("adam.casadi")
 pin = pytest.importorskip("pinocchio")
 
 TOL = 1e-12
-
-
-def _link(name: str, x: float = 0.25) -> str:
-    return (
-        f'<link name="{name}"><inertial><origin xyz="{x} 0.02 0.01" rpy="0.1 0.2 0.3"/><mass value="1.3"/>'
-        '<inertia ixx="0.02" ixy="0.001" ixz="0.002" iyy="0.03" iyz="0.003" izz="0.04"/></inertial></link>'
-    )
 
 
 def _joint(name: str, parent: str, child: str, kind: str = "revolute", axis: str = "0 1 0") -> str:
@@ -45,13 +40,13 @@ def _joint(name: str, parent: str, child: str, kind: str = "revolute", axis: str
 
 def two_joint_urdf() -> str:
     """A planar-ish arm with exactly two revolute joints (adam: the joint Jacobian comes out 12 × 1)."""
-    body = _link("l1") + _link("l2") + _joint("j1", "base", "l1", axis="0 0 1") + _joint("j2", "l1", "l2")
+    body = link("l1") + link("l2") + _joint("j1", "base", "l1", axis="0 0 1") + _joint("j2", "l1", "l2")
     return f'<robot name="two"><link name="base"/>{body}<link name="tip"/>' + _fixed("tip", "l2") + "</robot>"
 
 
 def prismatic_urdf() -> str:
     """Revolute, prismatic (rotated origin), revolute (adam: a 12 × 1 motion subspace, a misplaced slider)."""
-    body = _link("l1") + _link("l2") + _link("l3")
+    body = link("l1") + link("l2") + link("l3")
     body += _joint("j1", "base", "l1", axis="0 0 1") + _joint("slide", "l1", "l2", "prismatic", "0.6 0 0.8")
     body += _joint("j3", "l2", "l3")
     return f'<robot name="slider"><link name="base"/>{body}<link name="tip"/>' + _fixed("tip", "l3") + "</robot>"
@@ -65,13 +60,10 @@ def _fixed(child: str, parent: str) -> str:
 
 
 def ur5_path() -> Path:
-    dist = pytest.importorskip("importlib.metadata")
     try:
-        files = dist.distribution("example-robot-data").files or []
-    except metadata.PackageNotFoundError:
+        return Path(ur5_urdf())
+    except GaussppError:
         pytest.skip("example-robot-data is not installed")
-    found = [f for f in files if str(f).endswith("ur_description/urdf/ur5_robot.urdf")]
-    return Path(str(dist.distribution("example-robot-data").locate_file(found[0])))
 
 
 @pytest.fixture(params=["ur5", "two", "prismatic"])
@@ -247,14 +239,7 @@ def test_ur5_tool_path_by_joint_torques_is_pinocchio_inverse_dynamics() -> None:
     path = str(ur5_path())
     mech = gp.from_urdf(path)
     q0 = np.array([0.1, -1.2, 1.5, -0.8, -1.4, 0.3])
-    p0 = ca.Function("p", [mech.q], [gp.frame_position(mech, "tool0")])(q0)
-    d = ca.DM([0.08, 0.05, -0.04])
-    path_constraint = gp.Holonomic(
-        lambda q, t: gp.frame_position(mech, "tool0", q) - (p0 + (1 - ca.cos(2 * t)) * d),
-        name="tool path",
-        realization=gp.Force(lambda q, v, t: ca.SX.eye(6)),
-    )
-    model = gp.Model(mech, path_constraint)
+    model = gp.Model(mech, tool_path(mech, "tool0", q0, np.array([0.08, 0.05, -0.04]), ca.DM.eye(6)))
     traj = gp.simulate(model, q0, np.zeros(6), 1.0, solver="qp", stabilize="baumgarte")
     assert traj.status == "success"
     assert np.abs(traj.g).max() < 1e-8
@@ -271,14 +256,8 @@ def _servo_check(path: str, coords: list[int], q0: np.ndarray, solver: str) -> N
     """The tip's ``coords`` follow ``p₀ + (1 − cos 2t) d`` by every joint's torque; RNEA and verify agree."""
     mech = gp.from_urdf(path)
     n = mech.nv
-    tip = ca.Function("p", [mech.q], [gp.frame_position(mech, "tip")[coords]])
-    p0, d = tip(q0), ca.DM([0.06, -0.04, 0.05][: len(coords)])
-    path_constraint = gp.Holonomic(
-        lambda q, t: gp.frame_position(mech, "tip", q)[coords] - (p0 + (1 - ca.cos(2 * t)) * d),
-        name="tip path",
-        realization=gp.Force(lambda q, v, t: ca.SX.eye(n)),
-    )
-    model = gp.Model(mech, path_constraint)
+    d = np.array([0.06, -0.04, 0.05][: len(coords)])
+    model = gp.Model(mech, tool_path(mech, "tip", q0, d, ca.DM.eye(n), coords))
     record = np.linspace(0.0, 1.0, 801)
     traj = gp.simulate(model, q0, np.zeros(n), 1.0, solver=solver, stabilize="baumgarte", record=record)
     assert traj.status == "success"
@@ -309,43 +288,14 @@ def test_prismatic_arm_tip_path_by_joint_forces_is_pinocchio_inverse_dynamics(tm
 
 
 # -- item 3: an underactuated arm (a passive elbow) ---------------------------------------------------------------
-def three_link_urdf() -> str:
-    """A planar arm in the horizontal plane (three joints about ``z``, links 0.5, 0.5 and 0.4 m to the tip)."""
-    joints = ""
-    for name, parent, child, x in (
-        ("shoulder", "base", "l1", 0),
-        ("elbow", "l1", "l2", 0.5),
-        ("wrist", "l2", "l3", 0.5),
-    ):
-        joints += (
-            f'<joint name="{name}" type="revolute"><parent link="{parent}"/><child link="{child}"/>'
-            f'<origin xyz="{x} 0 0"/><axis xyz="0 0 1"/>'
-            '<limit effort="100" velocity="10" lower="-3" upper="3"/></joint>'
-        )
-    tip = '<joint name="tip_fixed" type="fixed"><parent link="l3"/><child link="tip"/><origin xyz="0.4 0 0"/></joint>'
-    body = _link("l1") + _link("l2") + _link("l3") + joints + tip
-    return f'<robot name="three"><link name="base"/>{body}<link name="tip"/></robot>'
-
-
-#: The motors: shoulder and wrist (the rows of ``M``, ``D = Mᵀ``); the elbow is passive.
-MOTORS = ca.DM([[1, 0, 0], [0, 0, 1]])
-
-
 def _underactuated(tmp_path: Path) -> tuple[str, object, gp.Model]:
     path = tmp_path / "three.urdf"
     path.write_text(three_link_urdf())
     mech = gp.from_urdf(str(path))
-    tip = ca.Function("p", [mech.q], [gp.frame_position(mech, "tip")[[0, 1]]])
-    p0, d = tip(Q_UNDER), ca.DM([0.05, 0.04])
-    path_constraint = gp.Holonomic(
-        lambda q, t: gp.frame_position(mech, "tip", q)[[0, 1]] - (p0 + (1 - ca.cos(2 * t)) * d),
-        name="tip path",
-        realization=gp.Force(lambda q, v, t: MOTORS),
-    )
-    return str(path), mech, gp.Model(mech, path_constraint)
+    return str(path), mech, arm_model(mech)
 
 
-Q_UNDER = np.array([0.3, 0.8, -0.5])
+Q_UNDER = np.array(Q0)
 
 
 def _margin(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray) -> float:
@@ -387,7 +337,7 @@ def test_underactuated_arm_singular_where_the_passive_joint_decouples(tmp_path: 
     """A configuration where ``det(J A⁻¹ D) = 0`` though ``J`` has full rank: the margin vanishes there."""
     _, mech, model = _underactuated(tmp_path)
     J = ca.jacobian(gp.frame_position(mech, "tip")[[0, 1]], mech.q)
-    det = ca.Function("det", [mech.q], [ca.det(J @ ca.solve(mech.A, MOTORS.T))])
+    det = ca.Function("det", [mech.q], [ca.det(J @ ca.solve(mech.A, ca.DM(MOTORS).T))])
     q3 = brentq(lambda x: float(det([0.3, -0.3, x])), -1.5, -0.5, xtol=1e-15)
     singular = np.array([0.3, -0.3, q3])
     assert np.linalg.svd(np.array(ca.Function("J", [mech.q], [J])(singular)), compute_uv=False)[-1] > 0.1

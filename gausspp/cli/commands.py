@@ -112,8 +112,9 @@ def report(args: argparse.Namespace) -> int:
 def _step_options(args: argparse.Namespace, scene: scenes.Scene, meth: methods.Method) -> dict[str, Any]:
     """``solver``, ``backend`` and ``stabilize`` of :func:`gausspp.simulate` as the command line asks."""
     solver, backend = getattr(args, "solver", None), getattr(args, "backend", None)
-    if solver is None:  # the lane's own default (CVODES differentiates the right-hand side: the direct step)
-        solver = lanes.default_solver(meth)
+    if solver is None:  # the scene's own (a redundant robot: qp), if the lane takes it, else the lane's default
+        wanted = scene.params.get("solver")
+        solver = wanted if wanted is not None and lanes.accepts(meth, wanted) else lanes.default_solver(meth)
     elif not lanes.accepts(meth, solver):
         lane = lanes.lane_of(meth, lanes.KINDS[lanes.SMOOTH])
         raise UsageError(f"--method {meth.name} needs --solver {' or '.join(lane.solvers)} ({lane.solver_reason})")

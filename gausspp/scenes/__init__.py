@@ -38,6 +38,8 @@ _MODULES: dict[str, str] = {
     "planar-ladder": "planar_chain",
     "overhead-crane": "overhead_crane",
     "spring-chain-servo": "spring_chain_servo",
+    "ur5-tool-path": "ur5_tool_path",
+    "underactuated-arm": "underactuated_arm",
 }
 
 #: Scenes whose step is not a square equality system (contacts, bounded or extra actuators, redundant
@@ -49,21 +51,29 @@ GENERAL = ("block-on-floor", "bouncing-pendulum", "saturated-crane", "two-actuat
 #: studies and tests that step or simulate every scene skip them; the servo route solves them.
 SERVO = ("overhead-crane", "spring-chain-servo")
 
-__all__ = ["GENERAL", "SERVO", "Scene", "describe", "get", "names", "parameters"]
+#: Robots read from URDF (issue 20): built only with the robots extra (``pip install 'gausspp[robots]'``, a
+#: project error without), each stepped by the solver in its ``params["solver"]``; studies and tests that step
+#: every scene skip them, their own tests run them.
+ROBOT = ("ur5-tool-path", "underactuated-arm")
+
+__all__ = ["GENERAL", "ROBOT", "SERVO", "Scene", "describe", "get", "names", "parameters"]
 
 
 def names(kind: str = "all") -> list[str]:
     """Names of the scenes: ``"all"``, ``"equality"`` (the direct formula applies), ``"general"`` (the general
-    Gauss QP only) or ``"servo"`` (index > 3: neither one-step route applies)."""
+    Gauss QP only), ``"servo"`` (index > 3: neither one-step route applies) or ``"robot"`` (URDF robots: the
+    robots extra)."""
     if kind == "all":
         return list(_MODULES)
     if kind == "equality":
-        return [n for n in _MODULES if n not in GENERAL and n not in SERVO]
+        return [n for n in _MODULES if n not in GENERAL and n not in SERVO and n not in ROBOT]
     if kind == "general":
         return [n for n in _MODULES if n in GENERAL]
     if kind == "servo":
         return [n for n in _MODULES if n in SERVO]
-    raise UnknownNameError(f"scene kind {kind!r} is unknown; use 'all', 'equality', 'general' or 'servo'")
+    if kind == "robot":
+        return [n for n in _MODULES if n in ROBOT]
+    raise UnknownNameError(f"scene kind {kind!r} is unknown; use 'all', 'equality', 'general', 'servo' or 'robot'")
 
 
 def _builder(name: str) -> Callable[..., Scene]:
