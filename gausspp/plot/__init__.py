@@ -17,6 +17,7 @@ three_realizations  one constraint ``(ω, l) = 0`` kept ideally, by a servo torq
 skate               the nonholonomic and the vakonomic skate in the plane  (realizations)
 verification        the minimizing variation ``δx(t)`` of the integral principle (23)  (integral)
 work_precision      error against run time (the study of :mod:`gausspp.report`)  (runtime)
+animate             the mechanism moving, from its scene's ``drawing``, saved as GIF or MP4  (animation)
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import importlib
 import warnings
 from typing import Any
 
+from .animation import animate
 from .base import pyplot
 from .impacts import contacts
 from .integral import verification
@@ -44,6 +46,7 @@ MOVED = {
 
 __all__ = [
     "THREE_LABELS",
+    "animate",
     "contacts",
     "pyplot",
     "reaction_over_time",

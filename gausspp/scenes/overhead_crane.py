@@ -33,6 +33,7 @@ velocities and ``s̈`` come from the quotient rule on them with their polynomial
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -129,7 +130,28 @@ def build(
         description="overhead crane: trolley force and winch carry the payload along a path; tangential, index 5",
         params=dict(m1=m1, m2=m2, g=g, D=D, L0=L0, h=h, T=T),
         forces=forces,
+        drawing=drawing(path),
     )
+
+
+def drawing(path: Path) -> Callable[[np.ndarray], dict[str, Any]]:
+    """What to draw at ``q = (s, l, θ)`` (:attr:`Scene.drawing`): the rail, the trolley, the rope, the payload,
+    the prescribed path, and the trolley force (the reaction on ``s``) at the trolley."""
+    times = np.linspace(0.0, path.duration, 101)
+    curve = np.column_stack([path.X(times), path.Y(times)])
+    lo, hi = float(min(curve[:, 0].min(), 0.0)) - 0.5, float(curve[:, 0].max()) + 0.5
+
+    def draw(q: np.ndarray) -> dict[str, Any]:
+        trolley = (q[0], 0.0)
+        payload = (q[0] + q[1] * np.sin(q[2]), -q[1] * np.cos(q[2]))
+        return {
+            "segments": [((lo, 0.0), (hi, 0.0)), (trolley, payload)],
+            "points": [trolley, payload],
+            "path": curve,
+            "reaction": [(trolley, (0, None))],
+        }
+
+    return draw
 
 
 def _check(**positive: float) -> None:

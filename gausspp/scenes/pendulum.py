@@ -19,6 +19,8 @@ not a closed form; it is accurate to about ``1e-12``.
 
 from __future__ import annotations
 
+from typing import Any
+
 import casadi as ca
 import numpy as np
 
@@ -88,4 +90,12 @@ def build(
         exact=exact,
         description="planar rigid body pinned by two holonomic constraints; reference (Ic + mL²)φ̈ = −mgL cos φ",
         params=dict(m=m, Ic=Ic, L=L, g=g, phi0=phi0, omega0=omega0, t_end=t_end),
+        drawing=drawing,
     )
+
+
+def drawing(q: np.ndarray) -> dict[str, Any]:
+    """The rod from the pin (the origin) to the centre of mass ``(x, z)``; the reaction ``(R_x, R_z)`` on the
+    body drawn at its centre of mass (:attr:`Scene.drawing`)."""
+    body = (q[0], q[1])
+    return {"segments": [((0.0, 0.0), body)], "points": [body], "fixed": [(0.0, 0.0)], "reaction": [(body, (0, 1))]}

@@ -40,6 +40,10 @@ class Scene:
         The parameters the scene was built with.
     forces : callable ``t -> (m,) array`` or None
         The exact actuator forces ``λ(t)`` along :attr:`exact` where they are known (the servo scenes).
+    drawing : callable ``q -> dict`` or None
+        What to draw of the mechanism at ``q`` in the plane (:func:`gausspp.plot.animate`): ``"segments"`` (pairs
+        of points), ``"points"`` (bodies), ``"fixed"`` (pins), ``"path"`` (a prescribed path, ``(K, 2)``),
+        ``"reaction"`` (``(point, (i, j))``: the arrow ``(R[i], R[j])`` of the generalized reaction at ``point``).
     """
 
     name: str
@@ -52,6 +56,7 @@ class Scene:
     description: str
     params: dict[str, Any] = field(default_factory=dict)
     forces: Callable[[float], np.ndarray] | None = None
+    drawing: Callable[[np.ndarray], dict[str, Any]] | None = None
 
 
 # -- parameters: every scene's, checked by type in one place ---------------------------------------

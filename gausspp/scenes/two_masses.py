@@ -12,6 +12,8 @@ wall, which makes the exact motion a sinusoid), the constraint ``ẋ₂ − ẋ�
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..errors import InputError, UnknownNameError
@@ -69,4 +71,12 @@ def build(
         exact=exact,
         description="two masses on a line, rod (ideal) or follower force (servo); paper §1",
         params=dict(m1=m1, m2=m2, F=F, realization=realization, v=v, k=k, t_end=t_end),
+        drawing=drawing,
     )
+
+
+def drawing(q: np.ndarray) -> dict[str, Any]:
+    """The two masses on the line ``y = 0`` and the rod between them; the reaction on each mass, along the line
+    (:attr:`Scene.drawing`)."""
+    m1, m2 = (q[0], 0.0), (q[1], 0.0)
+    return {"segments": [(m1, m2)], "points": [m1, m2], "reaction": [(m1, (0, None)), (m2, (1, None))]}
