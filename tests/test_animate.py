@@ -64,7 +64,7 @@ def test_a_file_that_is_neither_gif_nor_mp4_is_refused(tmp_path: Path) -> None:
 
 def test_the_run_command_writes_an_animation(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "masses.gif"
-    code = cli.main(["run", "two-masses", "--t-end", "0.5", "--samples", "30", "--animate", str(out), "-q"])
+    code = cli.main(["run", "two-masses", "--t-end", "0.5", "--samples", "30", "--animate", str(out), "--quiet"])
     assert code == 0
     assert _frames(out) == 31
     assert str(out) in capsys.readouterr().out
@@ -72,7 +72,7 @@ def test_the_run_command_writes_an_animation(tmp_path: Path, capsys: pytest.Capt
 
 def test_the_run_command_refuses_a_scene_without_a_drawing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "skate.gif"
-    code = cli.main(["run", "skate", "--t-end", "0.1", "--animate", str(out), "-q"])
+    code = cli.main(["run", "skate", "--t-end", "0.1", "--animate", str(out), "--quiet"])
     assert code == 1
     assert "no drawing" in capsys.readouterr().err
     assert not out.exists()

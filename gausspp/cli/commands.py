@@ -159,12 +159,18 @@ def run(args: argparse.Namespace) -> int:
     ``.npz``/``.nc`` file, :func:`gausspp.studies.output.write_trajectory`)."""
     params = parse_params(args.scene, args.param)
     scene = build(args.scene, params)
+    animation = args.animate
+    if animation is not None:
+        plot.animation.drawing_of(scene)  # refused before the run, not after
     traj, wall, dt = _simulate(args, scene, f"simulating {args.scene}")
     print(tables.label(scene.name, params))
     _print(runs.summary_lines(scene, traj, wall, dt, args.rtol))
     if args.out is not None:
         files = output.write_trajectory(traj, scene, params, Path(args.out))
         print(f"  {'written':15s} {', '.join(str(f) for f in files)}")
+    if animation is not None:
+        plot.animate(scene, traj, out=animation)
+        print(f"  {'animation':15s} {animation}")
     if not traj.success:
         raise GaussppError(f"the run failed: {tables.one_line(traj.message)}")
     return EXIT_OK

@@ -125,9 +125,12 @@ exact motion where the scene knows it). With --out DIR, write DIR/SCENE.npz
 DIR/SCENE.png; with --out FILE.npz or FILE.nc (netCDF, needs gausspp[data]),
 that one file. Both read back by gausspp.load_trajectory (then gp.verify). A
 run that fails midway still writes what it computed, then exits with 1.
+With --animate FILE.gif (or .mp4), draw the mechanism moving (scenes that
+carry a drawing; needs matplotlib).
 
 examples:
   gausspp run two-masses --param realization=servo --param F=1
+  gausspp run pendulum --animate pendulum.gif
   gausspp run rigid-body-servo -p "n=(1, 0.2, 0)" --method rk4 --dt 1e-3 --out results
   gausspp run skate -p realization=vakonomic --solver direct"""
 
@@ -236,6 +239,12 @@ def _add_run(sub: Any, common: Parser) -> None:
         metavar="PATH",
         help="write the trajectory: to the directory PATH (NPZ, CSV and, with matplotlib, PNG), or to one file "
         "PATH ending .npz or .nc (netCDF); read back by gausspp.load_trajectory",
+    )
+    r.add_argument(
+        "--animate",
+        metavar="FILE",
+        help="draw the mechanism moving into FILE (.gif, or .mp4 with ffmpeg; needs matplotlib); scenes with a "
+        "drawing: pendulum, two-masses, overhead-crane, ...",
     )
 
 

@@ -102,8 +102,9 @@ class _Frames:
     def update(self, k: int) -> list[Any]:
         pic = self.pictures[k]
         segs = np.reshape(np.asarray(pic.get("segments", []), float), (-1, 2, 2))
-        xs = np.concatenate([[a[0], b[0], np.nan] for a, b in segs]) if len(segs) else []
-        ys = np.concatenate([[a[1], b[1], np.nan] for a, b in segs]) if len(segs) else []
+        gaps = np.full((len(segs), 1, 2), np.nan)  # one polyline, the segments split by NaN
+        xy = np.concatenate([segs, gaps], axis=1).reshape(-1, 2)
+        xs, ys = xy[:, 0], xy[:, 1]
         self.links.set_data(xs, ys)
         for line, key in ((self.bodies, "points"), (self.fixed, "fixed")):
             pts = np.reshape(np.asarray(pic.get(key, []), float), (-1, 2))
