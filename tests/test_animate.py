@@ -26,7 +26,9 @@ def _run(scene: gp.scenes.Scene) -> object:
     return gp.simulate(scene.model, scene.q0, scene.v0, scene.t_end, record=np.linspace(0, scene.t_end, 61))
 
 
-@pytest.mark.parametrize(("name", "frames"), [("pendulum", 12), ("two-masses", 20), ("overhead-crane", 15)])
+@pytest.mark.parametrize(
+    ("name", "frames"), [("pendulum", 12), ("two-masses", 20), ("overhead-crane", 15), ("planar-chain", 8)]
+)
 def test_animate_writes_a_gif_with_one_frame_per_asked_frame(tmp_path: Path, name: str, frames: int) -> None:
     scene = gp.scenes.get(name)
     out = tmp_path / f"{name}.gif"

@@ -105,7 +105,16 @@ def build(
         exact=exact,
         description=f"planar chain of {N} pinned links in maximal coordinates ({3 * N} coordinates, {2 * N} rows)",
         params=dict(N=N, m=m, L=L, g=g, theta0=theta0, t_end=t_end),
+        drawing=lambda q: chain_drawing(q, L),
     )
+
+
+def chain_drawing(q: np.ndarray, L: float) -> dict[str, Any]:
+    """The links ``pᵢ⁻ pᵢ⁺``, their centres of mass and the top pin at the origin (:attr:`Scene.drawing`)."""
+    links = np.reshape(q, (-1, 3))
+    half = 0.5 * L * np.column_stack([np.cos(links[:, 2]), np.sin(links[:, 2])])
+    tops, bottoms = links[:, :2] - half, links[:, :2] + half
+    return {"segments": list(zip(tops, bottoms, strict=True)), "points": list(links[:, :2]), "fixed": [(0.0, 0.0)]}
 
 
 def build_planar_ladder(
