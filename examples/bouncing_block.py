@@ -1,4 +1,5 @@
 """A tilted block dropped on a floor: it rocks on its corners, loses energy at each impact, and settles.
+=====================================================================================================
 
 The scene ``block-on-floor``: a planar block (width 0.4, height 0.2, mass 1) whose two bottom corners
 are unilateral contacts with restitution e. Tilted, it lands on one corner, rocks from corner to

@@ -1,4 +1,5 @@
 """An overhead crane carries its load along a prescribed path: a servo-constraint the one-step formula cannot solve.
+=================================================================================================================
 
 The scene ``overhead-crane``: a trolley (m₁ = 10 kg) on a rail pushed by F₁, a payload (m₂ = 2 kg) on a rope whose
 length a winch sets with the tension F₂; the payload's path is prescribed — a 2 m transfer in 4 s that lifts it

@@ -1,4 +1,5 @@
 """Error against run time: which integrator and step solver buys accuracy cheapest.
+================================================================================
 
 The pendulum made by two holonomic constraints (a planar body pinned at a point) is run over a
 sweep of step sizes (fixed-step methods) or tolerances (adaptive ones), with each step solved

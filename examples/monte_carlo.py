@@ -1,4 +1,5 @@
 """Monte Carlo over uncertain initial data: how hard does the pin pull, and how good is RK4?
+=========================================================================================
 
 The pendulum scene — a rigid body (m = 1, Ic = 0.01) held at L = 1 from its centre of mass by two
 holonomic pin constraints — is released from a random angle φ0 ~ U(−π/2, π/2) with a random spin
@@ -7,12 +8,12 @@ default per-scene task, ``sweep("pendulum", samples)``: the initial data travel 
 the pins here), so each worker builds the model once. Each run (RK4, dt = 2 ms, 1 s) reduces to a few
 numbers; this script looks at two of them:
 
-- the largest generalized reaction |R| over the run (the pin force and its moment about the centre of
+- the largest generalized reaction ``|R|`` over the run (the pin force and its moment about the centre of
   mass), in units of m g — a design load with a spread, not one number;
-- RK4's energy error |ΔE| (the pins do no work, so any change of energy is the integrator's).
+- RK4's energy error ``|ΔE|`` (the pins do no work, so any change of energy is the integrator's).
 
 Both are checked against physics: energy conservation gives the spin at the bottom of the swing,
-ω_b² = φ̇0² + 2 m g L (sin φ0 + 1)/(Ic + m L²), where the pin pulls hardest, |R| = m g + m L ω_b². Runs that
+ω_b² = φ̇0² + 2 m g L (sin φ0 + 1)/(Ic + m L²), where the pin pulls hardest, ``|R|`` = m g + m L ω_b². Runs that
 swing through the bottom reach that load; the others stay below it. The energy error grows with ω_b.
 
 Run: python examples/monte_carlo.py [figure.png] [--samples N] [--workers N] [--out results.npz] [--plot]

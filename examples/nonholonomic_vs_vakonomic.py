@@ -1,4 +1,5 @@
 """Nonholonomic vs vakonomic: one constraint, two laws of motion (Kozlov 1989, (17)–(18)).
+=======================================================================================
 
 A skate (knife edge) slides in the plane and cannot move sideways: −sin θ ẋ + cos θ ẏ = 0.
 The classical (d'Alembert–Lagrange, nonholonomic) law: the blade's reaction is a sideways

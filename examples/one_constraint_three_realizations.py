@@ -1,4 +1,5 @@
 """One constraint, three realizations: three motions (Kozlov 1989, §§2, 4).
+========================================================================
 
 A rigid body (principal moments 1, 2, 3) turns about a fixed point and must keep the body
 angular velocity ω in the plane (ω, l) = 0, l = (1, 1, 1)/√3. The constraint is kept

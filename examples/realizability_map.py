@@ -1,4 +1,5 @@
 """Where can a servo torque along n keep the constraint (ω, l) = 0?  (Kozlov 1989, §2)
+===================================================================================
 
 A rigid body (principal moments 1, 2, 3) must keep (ω, l) = 0 by a torque λn along a body axis
 n. The step is solvable iff (I⁻¹n, l) ≠ 0. The paper calls the bad set "n orthogonal to l",

@@ -1,4 +1,5 @@
 """A UR5's tool follows a prescribed path, realized by its six joint torques: servo inverse dynamics.
+==================================================================================================
 
 The UR5 of example-robot-data (``gp.from_urdf``): six revolute joints, ``A(q) q̈ = τ − h(q, v)``. The tool frame's
 position ``p(q)`` must follow ``p₀ + (1 − cos 2t) d`` — three coordinates — and the constraint is realized by a

@@ -1,4 +1,5 @@
 """Two masses, one constraint, two realizations (Kozlov 1989, §1).
+===============================================================
 
 A force F pulls mass m2; the constraint ẋ₂ = ẋ₁ keeps the masses moving together. Kept by a
 rigid rod (ideal), both accelerate at F/(m1+m2). Kept by a follower force acting on m1 only

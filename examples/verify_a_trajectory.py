@@ -1,4 +1,5 @@
 """Verifying a trajectory, and catching a wrong one, by the integral principle (Kozlov 1989, §6).
+==============================================================================================
 
 A path x(t) on the constraint is a motion of a model iff no admissible variation δx (vanishing
 at the ends, obeying the realization's virtual displacements) lowers the integral compulsion

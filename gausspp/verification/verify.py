@@ -51,6 +51,8 @@ def verify(
         ``ẍ`` from the path's velocities (quintic spline; the honest check) or the trajectory's
         recorded accelerations (measured data).
 
+    Notes
+    -----
     An over-actuated :class:`~gausspp.Force` enters with the relations of its least-compulsion
     reaction, ``S H⁻¹ M δx = 0``, so a path with another allocation is not a motion.
 

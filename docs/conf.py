@@ -1,0 +1,127 @@
+"""Sphinx configuration: the gausspp site (``make docs``), built offline with warnings as errors.
+
+The API reference is written at build time from ``gausspp.__all__`` and ``gausspp.scenes.__all__`` (one
+list of public names, the packages' own), and the gallery runs every script in ``examples/`` except
+those named in ``SLOW_EXAMPLES`` (shown, not executed) when the environment variable ``GAUSSPP_DOCS_SKIP_SLOW`` is set.
+"""
+
+from __future__ import annotations
+
+import inspect
+import os
+import re
+import sys
+import tempfile
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parent
+ROOT = DOCS.parent
+sys.path.insert(0, str(ROOT))
+
+import gausspp  # noqa: E402
+import gausspp.scenes  # noqa: E402
+
+project = "gausspp"
+author = "the gausspp authors"
+copyright = "the gausspp authors"
+release = version = gausspp.__version__
+
+extensions = [
+    "myst_parser",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.autosummary",
+    "sphinx.ext.napoleon",
+    "sphinx.ext.mathjax",
+    "sphinx_gallery.gen_gallery",
+]
+source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
+exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "auto_examples/*.ipynb", "auto_examples/*.py"]
+templates_path = ["_templates"]
+# the gallery passes a function (reset_argv) in its configuration: the environment cache skips it
+suppress_warnings = ["config.cache"]
+
+html_theme = "pydata_sphinx_theme"
+html_title = "gausspp"
+html_theme_options = {"navigation_with_keys": False, "show_prev_next": True}
+
+myst_heading_anchors = 3
+myst_enable_extensions = ["dollarmath", "amsmath"]
+
+autosummary_generate = True
+autosummary_imported_members = True
+autosummary_ignore_module_all = False
+autodoc_default_options = {"members": True, "show-inheritance": True}
+autodoc_typehints = "description"
+napoleon_numpy_docstring = True
+napoleon_google_docstring = False
+
+# The examples the test build (tests/test_docs_site.py) shows without running; `make docs` runs them all.
+# Measured in the full build on a shared 2-core machine (docs/auto_examples/sg_execution_times.rst): this one
+# takes 26 s, every other example 1.4-5 s.
+SLOW_EXAMPLES = [
+    "error_vs_runtime.py",  # a work-precision sweep: four integrators x two step solvers, repeated
+]
+SKIP_SLOW = bool(os.environ.get("GAUSSPP_DOCS_SKIP_SLOW"))
+_slow = "|".join(re.escape(name) for name in SLOW_EXAMPLES)
+
+# Each example takes its figure's file name in argv[1]; in the build it goes to a scratch directory,
+# not into examples/ (the gallery shows the figure captured from matplotlib).
+_FIGURES = Path(tempfile.mkdtemp(prefix="gausspp-docs-"))
+
+
+def _example_argv(gallery_conf: dict, script_vars: dict) -> list[str]:
+    """Pass the example an output path in a scratch directory."""
+    return [str(_FIGURES / (Path(script_vars["src_file"]).stem + ".png"))]
+
+
+sphinx_gallery_conf = {
+    "examples_dirs": str(ROOT / "examples"),
+    "gallery_dirs": "auto_examples",
+    # executed: every script, or all but the slow ones (these still appear, code without output)
+    "filename_pattern": rf"/(?!({_slow})$)[^/]+\.py$" if SKIP_SLOW else r"/[^/]+\.py$",
+    "ignore_pattern": r"__init__\.py$",
+    "image_scrapers": ("matplotlib",),
+    "reset_argv": _example_argv,
+    "download_all_examples": True,
+    "remove_config_comments": True,
+    "abort_on_example_error": False,
+    "only_warn_on_example_error": False,
+    "min_reported_time": 1,
+    "within_subsection_order": "FileNameSortKey",
+}
+
+
+def _kind(obj: object) -> str:
+    if inspect.ismodule(obj):
+        return "Modules"
+    if inspect.isclass(obj) and issubclass(obj, (Exception, Warning)):
+        return "Errors and warnings"
+    if inspect.isclass(obj):
+        return "Classes"
+    return "Functions"
+
+
+def _api_section(module: object, title: str) -> list[str]:
+    groups: dict[str, list[str]] = {}
+    for name in sorted(module.__all__, key=str.lower):
+        groups.setdefault(_kind(getattr(module, name)), []).append(name)
+    lines = [title, "-" * len(title), "", f".. currentmodule:: {module.__name__}", ""]
+    for kind in ("Classes", "Functions", "Modules", "Errors and warnings"):
+        if kind in groups:
+            lines += [f".. rubric:: {kind}", "", ".. autosummary::", "   :toctree: generated", ""]
+            lines += [f"   {name}" for name in groups[kind]] + [""]
+    return lines
+
+
+def _write_api() -> None:
+    """Write api/index.rst from the packages' ``__all__`` (every public name, one place)."""
+    lines = ["API reference", "=============", "", "Every public name of ``gausspp`` and ``gausspp.scenes``.", ""]
+    lines += _api_section(gausspp, "gausspp") + _api_section(gausspp.scenes, "gausspp.scenes")
+    target = DOCS / "api" / "index.rst"
+    target.parent.mkdir(exist_ok=True)
+    text = "\n".join(lines)
+    if not target.exists() or target.read_text() != text:
+        target.write_text(text)
+
+
+_write_api()
