@@ -4,7 +4,7 @@
 A force F pulls mass m2; the constraint ẋ₂ = ẋ₁ keeps the masses moving together. Kept by a
 rigid rod (ideal), both accelerate at F/(m1+m2). Kept by a follower force acting on m1 only
 (a Béghin servo-constraint), m2 feels nothing but F and both accelerate at F/m2 — the same
-constraint, a different motion. The figure shows both motions over time.
+constraint, a different motion. The figure shows both motions over time and their difference.
 Run: python examples/two_masses.py [output.png]
 """
 
@@ -49,7 +49,11 @@ fig = plot.trajectory(
     runs,
     q_labels=["$x_1$", "$x_2$"],
     v_labels=["$v_1$", "$v_2$"],
-    title=f"Two masses, force {F:g} on m2, kept together by a rod (solid) or a follower force on m1 (dashed)",
+    difference=True,
+    title=(
+        f"scene two-masses: m1 = {m1:g} kg, m2 = {m2:g} kg, F = {F:g} N on m2, no spring (k = 0), v0 = 0 m/s\n"
+        "kept by a rod (ideal, solid, circles) or a follower force on m1 (servo, dashed, squares); t in s, x in m"
+    ),
 )
 out = sys.argv[1] if len(sys.argv) > 1 else "two_masses.png"
 fig.savefig(out, dpi=110, bbox_inches="tight")

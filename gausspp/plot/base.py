@@ -12,6 +12,10 @@ from ..errors import GaussppError, InputError, ShapeError
 
 #: Line styles that tell runs apart when several are drawn on one axes (colours tell components).
 STYLES = ("-", "--", ":", "-.")
+#: Markers that tell runs apart together with :data:`STYLES` (drawn every few samples).
+MARKERS = ("o", "s", "^", "D")
+#: The Okabe–Ito colour-blind-safe palette (Okabe & Ito 2008), black last: colours that tell series apart.
+OKABE_ITO = ("#0072B2", "#E69F00", "#009E73", "#D55E00", "#CC79A7", "#56B4E9", "#F0E442", "#000000")
 #: The models' default warning level of the realizability margin (``Model(margin_warn=...)``).
 MARGIN_WARN = 1e-6
 
@@ -27,6 +31,11 @@ def pyplot() -> Any:
     import matplotlib.pyplot as plt
 
     return plt
+
+
+def palette(i: int) -> str:
+    """The ``i``-th colour of :data:`OKABE_ITO` (cycling)."""
+    return OKABE_ITO[i % len(OKABE_ITO)]
 
 
 def as_runs(obj: Any, what: str) -> dict[str, Any]:

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ShapeError
-from .base import legend, pyplot, suffix
+from .base import legend, palette, pyplot, suffix
 
 #: Event kinds marked on the gap panel: gid → (marker, filled, legend text).
 EVENT_MARKERS = {
@@ -161,7 +161,7 @@ def contacts(model: Any, traj: Any, *, title: str | None = None) -> Any:
     plt = pyplot()
     t, gaps = np.asarray(traj.t, float), np.asarray(traj.gap, float)
     fig, (gap_ax, force_ax, energy_ax) = plt.subplots(3, 1, figsize=(8.0, 8.0), sharex=True, layout="constrained")
-    colors = plt.get_cmap("tab10")
+    colors = palette
     for i, name in enumerate(names):
         gap_ax.plot(t, gaps[:, i], color=colors(i % 10), lw=1.2, label=f"gap of {name}")
         force_ax.plot(t, traj.contact_force[:, i], color=colors(i % 10), lw=1.2, label=f"force on {name}")

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ShapeError
-from .base import MARGIN_WARN, STYLES, as_runs, carried_names, labels, legend, pyplot, suffix
+from .base import MARGIN_WARN, MARKERS, STYLES, as_runs, carried_names, labels, legend, palette, pyplot, suffix
 
 
 def _same_sizes(runs: Mapping[str, Any], phase: bool) -> tuple[int, int]:
@@ -26,27 +26,59 @@ def _same_sizes(runs: Mapping[str, Any], phase: bool) -> tuple[int, int]:
     return nq, nv
 
 
+def _difference_panels(axes: Any, runs: Mapping[str, Any], ql: Sequence[str], vl: Sequence[str]) -> None:
+    """The second run minus the first, ``q_b(t) − q_a(t)`` and ``v_b(t) − v_a(t)``, on the first run's times."""
+    (na, a), (nb, b) = list(runs.items())[:2]
+    for ax, xa, xb, names, what in ((axes[0], a.q, b.q, ql, "coordinates"), (axes[1], a.v, b.v, vl, "velocities")):
+        for i in range(xa.shape[1]):
+            diff = np.interp(a.t, b.t, xb[:, i]) - xa[:, i]
+            ax.plot(a.t, diff, STYLES[i % len(STYLES)], color=palette(i), label=f"Δ{names[i]}")
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set(xlabel="time t", ylabel=f"Δ {what}", title=f"difference of the {what}: {nb} − {na}")
+
+
+def _run_lines(axes: Any, runs: Mapping[str, Any], ql: Sequence[str], vl: Sequence[str], phase: bool) -> None:
+    """Each run in one line style and marker, each component in one colour (Okabe–Ito)."""
+    for r, (name, tr) in enumerate(runs.items()):
+        ls, sfx = STYLES[r % len(STYLES)], suffix(name, tr)
+        mark = dict(marker=MARKERS[r % len(MARKERS)], markevery=max(1, tr.t.size // 12), ms=5) if len(runs) > 1 else {}
+        for i in range(tr.q.shape[1]):
+            axes[0].plot(tr.t, tr.q[:, i], ls, color=palette(i), label=ql[i] + sfx, **mark)
+        for i in range(tr.v.shape[1]):
+            axes[1].plot(tr.t, tr.v[:, i], ls, color=palette(i), label=vl[i] + sfx, **mark)
+        if phase:
+            for i in range(tr.q.shape[1]):
+                axes[2].plot(tr.q[:, i], tr.v[:, i], ls, color=palette(i), label=f"({ql[i]}, {vl[i]}){sfx}")
+                axes[2].plot(tr.q[0, i], tr.v[0, i], "o", color=palette(i), ms=4)
+
+
 def trajectory(
     traj: Any,
     *,
     phase: bool = False,
+    difference: bool = False,
     q_labels: Sequence[str] | None = None,
     v_labels: Sequence[str] | None = None,
     title: str | None = None,
 ) -> Any:
-    """Coordinates and velocities over time, and optionally the phase portrait.
+    """Coordinates and velocities over time, and optionally the phase portrait and two runs' difference.
 
     Draws ``q_i(t)`` and ``v_i(t)`` (``v = q̇``, or the quasi-velocities ``ω`` of a rigid body) in
     two panels; with ``phase=True`` a third panel draws each pair ``(q_i(t), v_i(t))``, the
     projection of the motion onto the phase plane of coordinate ``i``, with its start marked.
+    With ``difference=True`` (two runs ``a``, ``b``) a second row draws ``q_b(t) − q_a(t)`` and
+    ``v_b(t) − v_a(t)`` (``b`` interpolated linearly on ``a``'s times): what tells the motions apart
+    when their curves nearly overlap.
 
     Parameters
     ----------
     traj : Trajectory or mapping of str to Trajectory
-        One run, or several (e.g. ``{"rod": a, "servo": b}``) drawn with one line style each;
-        components keep their colour across runs. All runs must have the same ``nq`` and ``nv``.
+        One run, or several (e.g. ``{"rod": a, "servo": b}``) drawn with one line style and marker each;
+        components keep their colour (Okabe–Ito palette) across runs. All runs must have the same ``nq`` and ``nv``.
     phase : bool
         Add the phase portrait; needs ``nq == nv`` (not a rigid body's quaternion and ``ω``).
+    difference : bool
+        Add the row of differences; needs exactly two runs.
     q_labels, v_labels : sequence of str, optional
         Names of the components (default: the names the first run carries from its model, else ``q₁…``, ``v₁…``).
     title : str, optional
@@ -54,32 +86,30 @@ def trajectory(
     Returns
     -------
     matplotlib.figure.Figure
-        Two axes (``q``, ``v``), three with ``phase``.
+        Axes ``q``, ``v`` (, phase) (, ``Δq``, ``Δv`` with ``difference``).
     """
     plt = pyplot()
     runs = as_runs(traj, "trajectories")
     nq, nv = _same_sizes(runs, phase)
+    if difference and len(runs) != 2:
+        raise InputError(f"difference=True draws the second run minus the first; got {len(runs)} runs, give two")
     first = next(iter(runs.values()))
     q_labels = q_labels if q_labels is not None else carried_names(first, "coordinate", nq)
     v_labels = v_labels if v_labels is not None else carried_names(first, "velocity", nv)
     ql, vl = labels(q_labels, nq, "q"), labels(v_labels, nv, "v")
-    ncols = 3 if phase else 2
-    fig, axes = plt.subplots(1, ncols, figsize=(4.8 * ncols, 4.0), layout="constrained")
-    colors = plt.get_cmap("tab10")
-    for r, (name, tr) in enumerate(runs.items()):
-        ls, sfx = STYLES[r % len(STYLES)], suffix(name, tr)
-        for i in range(nq):
-            axes[0].plot(tr.t, tr.q[:, i], ls, color=colors(i % 10), label=ql[i] + sfx)
-        for i in range(nv):
-            axes[1].plot(tr.t, tr.v[:, i], ls, color=colors(i % 10), label=vl[i] + sfx)
-        if phase:
-            for i in range(nq):
-                axes[2].plot(tr.q[:, i], tr.v[:, i], ls, color=colors(i % 10), label=f"({ql[i]}, {vl[i]}){sfx}")
-                axes[2].plot(tr.q[0, i], tr.v[0, i], "o", color=colors(i % 10), ms=4)
+    ncols, nrows = (3 if phase else 2), (2 if difference else 1)
+    fig, grid = plt.subplots(nrows, ncols, figsize=(4.8 * ncols, 4.0 * nrows), layout="constrained", squeeze=False)
+    axes = list(grid[0])
+    _run_lines(axes, runs, ql, vl, phase)
     axes[0].set(xlabel="time t", ylabel="coordinates q", title="coordinates over time")
     axes[1].set(xlabel="time t", ylabel="velocities v", title="velocities over time")
     if phase:
         axes[2].set(xlabel="coordinate $q_i$", ylabel="velocity $v_i$", title="phase portrait (start: dot)")
+    if difference:
+        _difference_panels(grid[1], runs, ql, vl)
+        axes += list(grid[1][:2])
+        if phase:
+            fig.delaxes(grid[1][2])
     for ax in axes:
         ax.grid(True, alpha=0.3)
         legend(ax)
@@ -139,7 +169,7 @@ def reaction_over_time(traj: Any, *, title: str | None = None) -> Any:
     plt = pyplot()
     runs = as_runs(traj, "trajectories")
     fig, axes = plt.subplots(3, 1, figsize=(8.0, 7.5), sharex=True, layout="constrained")
-    lowest = _reaction_panels(axes, runs, plt.get_cmap("tab10"))
+    lowest = _reaction_panels(axes, runs, palette)
     axes[2].axhline(MARGIN_WARN, color="tab:red", ls=":", lw=1, label=f"default warning level {MARGIN_WARN:g}")
     axes[2].set_ylim(min(lowest / 3, MARGIN_WARN / 10), 2.0)
     axes[0].set(ylabel="u", title=r"reaction unknowns $u$: $\lambda$ (ideal, force) or $\dot\lambda$ (flywheel)")

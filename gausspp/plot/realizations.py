@@ -10,7 +10,7 @@ import numpy as np
 from ..errors import InputError
 from ..scenes.rigid import inertia_matrix, unit_vector
 from ..scenes.suslov import steady_rotation
-from .base import given, pyplot, suffix, vec
+from .base import given, palette, pyplot, suffix, vec
 
 #: Keys and legend labels of the runs of :func:`gausspp.studies.figures.three_realizations_runs`.
 THREE_LABELS = {
@@ -120,7 +120,7 @@ def three_realizations(
     top = [fig.add_subplot(grid[0, 0])]
     top += [fig.add_subplot(grid[0, j], sharey=top[0]) for j in (1, 2)]
     plane, energy = fig.add_subplot(grid[1, :2]), fig.add_subplot(grid[1, 2])
-    _omega_panels(top, runs, plt.get_cmap("tab10"))
+    _omega_panels(top, runs, palette)
     _plane_panel(plane, runs, I, lv, nv)
     for key, color in zip(THREE_LABELS, ("tab:blue", "tab:orange", "tab:green"), strict=True):
         w = runs[key].v
