@@ -426,3 +426,21 @@ def test_two_masses_figure_announces_parameters_and_tells_motions_apart(tmp_path
     assert np.abs(dq_ax.get_lines()[1].get_ydata()).max() > 0.1  # and the difference panel shows it
     assert len(dv_ax.get_lines()) == 3  # Δv₁, Δv₂ and the zero line
     saved(fig, tmp_path / "two_masses.png")
+
+
+def test_three_realizations_title_and_limits_show_the_motions() -> None:
+    runs = three_realizations_runs(t_end=4.0, samples=201)
+    fig = plot.three_realizations(t_end=4.0, runs=runs)
+    title = fig.get_suptitle()
+    for part in ("inertia I = diag(1, 2, 3) kg·m²", "l = (0.577, 0.577, 0.577)", "n = (0, 0, 1)", "rad/s", "t = 0…4 s"):
+        assert part in title
+    plane = fig.axes[3]
+    fig.canvas.draw()
+    paths = np.concatenate(
+        [np.c_[line.get_xdata(), line.get_ydata()] for line in plane.get_lines()]
+    )  # paths, ends, start, ω∞
+    for lo_hi, data in ((plane.get_xlim(), paths[:, 0]), (plane.get_ylim(), paths[:, 1])):
+        span = np.ptp(data)
+        assert lo_hi[1] - lo_hi[0] < 1.3 * span  # the limits fit the paths: no empty band hides them
+    styles = {(line.get_color(), line.get_linestyle()) for line in fig.axes[4].get_lines()}
+    assert len(styles) == 3  # three energies told apart by colour and line style

@@ -18,8 +18,10 @@ THREE_LABELS = {
     "force": "Force: servo torque along n",
     "inertial": "Inertial: flywheel on axis n",
 }
+#: Colour (Okabe–Ito) and line style of each realization of :data:`THREE_LABELS`.
+THREE_STYLE = {"ideal": (palette(0), "-"), "force": (palette(1), "--"), "inertial": (palette(2), "-.")}
 #: Colour and legend label of each law of :func:`gausspp.studies.figures.skate_runs`.
-SKATE_STYLE = {"nonholonomic": ("tab:blue", "nonholonomic (ideal)"), "vakonomic": ("tab:red", "vakonomic")}
+SKATE_STYLE = {"nonholonomic": (palette(0), "nonholonomic (ideal)"), "vakonomic": (palette(3), "vakonomic")}
 
 
 def plane_basis(I: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -45,20 +47,20 @@ def _given_runs(runs: Any, figure: str, study: str, keys: Any) -> dict[str, Any]
 def _plane_panel(plane: Any, runs: Mapping[str, Any], I: np.ndarray, l: np.ndarray, n: np.ndarray) -> None:
     """The paths of ``ω`` in the plane ``(ω, l) = 0``, the common start and Suslov's steady rotation."""
     e1, e2 = plane_basis(I, l)
-    for key, color in zip(THREE_LABELS, ("tab:blue", "tab:orange", "tab:green"), strict=True):
+    for key, (color, ls) in THREE_STYLE.items():
         w = runs[key].v
-        plane.plot(w @ e1, w @ e2, color=color, label=THREE_LABELS[key])
+        plane.plot(w @ e1, w @ e2, ls, color=color, label=THREE_LABELS[key])
         plane.plot(w[-1] @ e1, w[-1] @ e2, "s", color=color, ms=6)
     w0 = runs["ideal"].v[0]
     plane.plot(w0 @ e1, w0 @ e2, "ko", ms=6, label="common start ω₀ (end: squares)")
     w_inf = steady_rotation(I, l, w0)
-    plane.plot(w_inf @ e1, w_inf @ e2, "*", color="tab:blue", ms=14, mec="k", label="Suslov's steady rotation ω∞")
+    plane.plot(w_inf @ e1, w_inf @ e2, "*", color=palette(0), ms=14, mec="k", label="Suslov's steady rotation ω∞")
     plane.set(
         xlabel=r"$(\omega, e_1)$,  $e_1 \parallel l \times Il$",
         ylabel=r"$(\omega, e_2)$,  $e_2 = l \times e_1$",
-        title=f"ω in the constraint plane (ω, l) = 0: three motions (n = {vec(n)})",
+        title=f"ω in the constraint plane (ω, l) = 0 (rad/s): three motions (n = {vec(n)})",
     )
-    plane.set_aspect("equal", adjustable="datalim")
+    plane.set_aspect("equal", adjustable="box")  # limits fit the paths: nothing but the motions fills the panel
     plane.grid(True, alpha=0.3)
     plane.legend(fontsize=8, loc="best")
 
@@ -70,10 +72,17 @@ def _omega_panels(top: Any, runs: Mapping[str, Any], colors: Any) -> None:
         tr = runs[key]
         for i in range(3):
             ax.plot(tr.t, tr.v[:, i], color=colors(i), label=comp[i])
-        ax.set(xlabel="time t", title=THREE_LABELS[key] + suffix("", tr))
+        ax.set(xlabel="time t (s)", title=THREE_LABELS[key] + suffix("", tr))
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8, loc="upper right")
-    top[0].set_ylabel("body angular velocity ω")
+    top[0].set_ylabel("body angular velocity ω (rad/s)")
+
+
+def _inertia_text(I: np.ndarray) -> str:
+    """``diag(1, 2, 3)`` for a diagonal inertia, else its rows."""
+    if np.allclose(I, np.diag(np.diag(I))):
+        return "diag" + vec(np.diag(I))
+    return "(" + ", ".join(vec(row) for row in I) + ")"
 
 
 def three_realizations(
@@ -122,14 +131,18 @@ def three_realizations(
     plane, energy = fig.add_subplot(grid[1, :2]), fig.add_subplot(grid[1, 2])
     _omega_panels(top, runs, palette)
     _plane_panel(plane, runs, I, lv, nv)
-    for key, color in zip(THREE_LABELS, ("tab:blue", "tab:orange", "tab:green"), strict=True):
+    for key, (color, ls) in THREE_STYLE.items():
         w = runs[key].v
-        energy.plot(runs[key].t, 0.5 * np.einsum("ti,ij,tj->t", w, I, w), color=color, label=key)
-    energy.set(xlabel="time t", ylabel=r"$\frac{1}{2}(I\omega, \omega)$", title="kinetic energy of the body")
+        energy.plot(runs[key].t, 0.5 * np.einsum("ti,ij,tj->t", w, I, w), ls, color=color, label=key)
+    energy.set(xlabel="time t (s)", ylabel=r"$\frac{1}{2}(I\omega, \omega)$ (J)", title="kinetic energy of the body")
     energy.grid(True, alpha=0.3)
     energy.legend(fontsize=8)
     w0 = runs["ideal"].v[0]
-    fig.suptitle(f"The constraint (ω, l) = 0, l = {vec(lv)}, kept three ways from the same ω₀ = {vec(w0)}")
+    fig.suptitle(
+        f"Suslov's body (gausspp.scenes.suslov): inertia I = {_inertia_text(I)} kg·m², "
+        f"constraint (ω, l) = 0 with l = {vec(lv)}, torque axis n = {vec(nv)}\n"
+        f"kept three ways from the same ω₀ = {vec(w0)} rad/s, t = 0…{runs['ideal'].t[-1]:g} s"
+    )
     return fig
 
 
