@@ -89,7 +89,10 @@ print(
 fig = plot.contacts(
     scene.model,
     traj,
-    title=f"Block tilted {p['tilt']} rad dropped from {p['drop']} (e = {p['e']}): rocks on its corners, then rests",
+    title=(
+        f"scene block-on-floor: block {p['w']} m × {p['h']} m, m = {p['m']} kg, tilted {p['tilt']} rad, "
+        f"dropped from {p['drop']} m, restitution e = {p['e']}: rocks on its corners, then rests"
+    ),
 )
 out = sys.argv[1] if len(sys.argv) > 1 else "bouncing_block.png"
 fig.savefig(out, dpi=100)

@@ -444,3 +444,13 @@ def test_three_realizations_title_and_limits_show_the_motions() -> None:
         assert lo_hi[1] - lo_hi[0] < 1.3 * span  # the limits fit the paths: no empty band hides them
     styles = {(line.get_color(), line.get_linestyle()) for line in fig.axes[4].get_lines()}
     assert len(styles) == 3  # three energies told apart by colour and line style
+
+
+def test_contacts_legend_does_not_contradict_the_restitution(
+    rocking_block: tuple[gp.scenes.Scene, gp.Trajectory],
+) -> None:
+    scene, traj = rocking_block
+    fig = plot.contacts(scene.model, traj, title=f"block-on-floor, e = {scene.params['e']}")
+    texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert not any("e = 0" in t for t in texts)  # a plastic impact is a slow one, not a run with e = 0
+    assert f"e = {scene.params['e']}" in fig.get_suptitle()

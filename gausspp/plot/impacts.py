@@ -13,7 +13,7 @@ from .base import legend, palette, pyplot, suffix
 #: Event kinds marked on the gap panel: gid → (marker, filled, legend text).
 EVENT_MARKERS = {
     "impact": ("v", True, "impact"),
-    "plastic impact": ("s", True, "plastic impact (e = 0: ends in rest)"),
+    "plastic impact": ("s", True, "plastic impact (slower than rest_speed: ends in rest)"),
     "lift-off": ("^", True, "lift-off"),
     "touch": ("o", False, "touch (no impact)"),
 }
