@@ -19,6 +19,7 @@ that motion (the rest of the Zeno sequence included). With a tilt the block rock
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -65,6 +66,7 @@ def build(
         lam0=None,
         t_end=t_end,
         exact=exact,
+        drawing=drawing(w, h, float(q0[0])),
         description="planar block dropped on a floor: four unilateral corner contacts, impacts with restitution e, "
         "then rest",
         params=dict(m=m, w=w, h=h, g=g, e=e, drop=drop, tilt=tilt, vx=vx, t_end=t_end),
@@ -128,3 +130,26 @@ def _bouncing(
             start, k = start + 2.0 * up / g, k + 1
 
     return exact
+
+
+def drawing(w: float, h: float, x0: float) -> Callable[[np.ndarray], dict[str, Any]]:
+    """What to draw at ``q = (x, z, θ)`` (:attr:`Scene.drawing`): the block's outline, its centre of mass with
+    the way it has gone, the floor (``3w`` wide about ``x0``) and the contact forces' sum (the reaction's
+    ``(x, z)`` part) at the centre of mass."""
+    body = 0.5 * np.array([[w, -h], [w, h], [-w, h], [-w, -h]])  # corners in body axes, in turn
+
+    def draw(q: np.ndarray) -> dict[str, Any]:
+        x, z, th = (float(c) for c in q[:3])
+        turn = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+        centre = np.array([x, z])
+        corners = centre + body @ turn.T
+        return {
+            "segments": [(corners[i], corners[(i + 1) % 4]) for i in range(4)],
+            "points": [centre],
+            "trace": [centre],
+            "ground": [((x0 - 1.5 * w, 0.0), (x0 + 1.5 * w, 0.0))],
+            "labels": ("x (m)", "z (m)"),
+            "reaction": [(centre, (0, 1))],
+        }
+
+    return draw

@@ -36,6 +36,7 @@ model (``redundant=False``) is the reference.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import casadi as ca
@@ -119,6 +120,7 @@ def build(
         lam0=None,
         t_end=float(t_end),
         exact=None,
+        drawing=drawing(float(l0), lengths),
         description=(
             "four-bar linkage with a redundant loop row (rank-deficient J): the QP gives the unique acceleration "
             "and the least-norm multiplier, the direct formula refuses"
@@ -214,3 +216,20 @@ def _loop(
     if redundant:
         constraints.append(Holonomic(third, name=f"closure ({third_row})"))
     return constraints
+
+
+def drawing(l0: float, lengths: tuple[float, float, float]) -> Callable[[np.ndarray], dict[str, Any]]:
+    """What to draw at ``q = (θ1, θ2, θ3)`` (:attr:`Scene.drawing`): the crank ``OB``, coupler ``BC`` and
+    rocker ``CP``, the ground pivots ``O``, ``P``, the ground ``OP``, and the coupler curve traced by the
+    coupler's midpoint. (The reaction is a set of joint torques: no arrow.)"""
+    l1, l2, _ = lengths
+
+    def draw(q: np.ndarray) -> dict[str, Any]:
+        phi1, phi2, _ = absolute_angles(np.asarray(q, float))
+        B = l1 * np.array([np.cos(phi1), np.sin(phi1)])
+        C = B + l2 * np.array([np.cos(phi2), np.sin(phi2)])
+        O, P = np.zeros(2), np.array([l0, 0.0])
+        return {"segments": [(O, B), (B, C), (C, P)], "points": [B, C], "fixed": [O, P], "ground": [(O, P)],
+                "trace": [0.5 * (B + C)]}  # fmt: skip
+
+    return draw

@@ -26,7 +26,7 @@ from ..model.constraints import Constraint
 from ..model.mechanism import RigidBody
 from ..model.model import Model
 from ..model.realizations import Inertial
-from .rigid import inertia_matrix, on_plane, unit_vector
+from .rigid import body_axes_drawing, inertia_matrix, on_plane, unit_vector
 from .scene import Scene
 
 
@@ -62,6 +62,7 @@ def build(
         lam0=lam,
         t_end=t_end,
         exact=None,
+        drawing=body_axes_drawing,
         description="gyrostat: a rotor on axis n keeps (ω, l) = 0 (flywheel realization); n = l is vakonomic; paper §4",
         params=dict(
             inertia=I.tolist(), n=n_.tolist(), l=l_.tolist(), lam0=float(lam[0]), vakonomic=vakonomic, t_end=t_end

@@ -31,7 +31,7 @@ from ..model.constraints import Constraint
 from ..model.mechanism import MassMatrix
 from ..model.model import Model
 from ..model.realizations import Force
-from .rigid import inertia_matrix, on_plane, unit_vector
+from .rigid import body_axes_drawing, inertia_matrix, on_plane, unit_vector
 from .scene import Scene
 
 
@@ -77,6 +77,7 @@ def build(
         lam0=None,
         t_end=t_end,
         exact=None,
+        drawing=body_axes_drawing,
         description="gyrostat with the rotor angle as a coordinate, motor torque as Béghin servo keeping (ω, l) = 0",
         params=dict(
             inertia=I.tolist(),

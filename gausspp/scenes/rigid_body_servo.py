@@ -17,7 +17,7 @@ from ..model.constraints import Constraint
 from ..model.mechanism import RigidBody
 from ..model.model import Model
 from ..model.realizations import Force
-from .rigid import inertia_matrix, on_plane, unit_vector
+from .rigid import body_axes_drawing, inertia_matrix, on_plane, unit_vector
 from .scene import Scene
 
 
@@ -49,6 +49,7 @@ def build(
         lam0=None,
         t_end=t_end,
         exact=None,
+        drawing=body_axes_drawing,
         description="rigid body, servo torque along n keeping (ω, l) = 0; n = l is Suslov's problem; paper §2",
         params=dict(inertia=I.tolist(), l=l_.tolist(), n=n_.tolist(), suslov=suslov, t_end=t_end),
     )

@@ -22,6 +22,7 @@ Coordinates ``q = (x, y, θ)``: the contact point and the blade's heading. Kinet
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -100,6 +101,21 @@ def build(
         lam0=np.array([float(lam0)]) if vakonomic else None,
         t_end=float(t_end),
         exact=None if vakonomic else exact_nonholonomic(q0, float(v0), float(omega0)),
+        drawing=drawing,
         description="skate (knife edge) in the plane, no sideways slip: nonholonomic or vakonomic law",
         params=dict(m=m, J=J, realization=realization, v0=v0, omega0=omega0, theta0=theta0, lam0=lam0, t_end=t_end),
     )
+
+
+#: The blade's drawn length (m).
+BLADE = 0.3
+
+
+def drawing(q: np.ndarray) -> dict[str, Any]:
+    """The blade (length :data:`BLADE`) along the heading ``θ`` through the contact point ``(x, y)``, the way
+    the contact point has gone, and the reaction's ``(x, y)`` part at the contact point (:attr:`Scene.drawing`)."""
+    x, y, th = (float(c) for c in q[:3])
+    half = 0.5 * BLADE * np.array([np.cos(th), np.sin(th)])
+    point = np.array([x, y])
+    return {"segments": [(point - half, point + half)], "points": [point], "trace": [point],
+            "reaction": [(point, (0, 1))]}  # fmt: skip
