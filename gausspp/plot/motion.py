@@ -182,7 +182,10 @@ def reaction_over_time(traj: Any, *, title: str | None = None) -> Any:
     lowest = _reaction_panels(axes, runs, palette)
     axes[2].axhline(MARGIN_WARN, color=palette(3), ls=":", lw=1, label=f"default warning level {MARGIN_WARN:g}")
     axes[2].set_ylim(min(lowest / 3, MARGIN_WARN / 10), 2.0)
-    axes[0].set(ylabel="u (N, N·m: per row)", title=r"reaction unknowns $u$: $\lambda$ (ideal, force) or $\dot\lambda$ (flywheel)")
+    axes[0].set(
+        ylabel="u (N, N·m: per row)",
+        title=r"reaction unknowns $u$: $\lambda$ (ideal, force) or $\dot\lambda$ (flywheel)",
+    )
     axes[1].set(ylabel="Z (N²/kg)", title=r"compulsion $Z = (A(\ddot x - a_0), \ddot x - a_0)$")
     axes[2].set(xlabel="time t (s)", ylabel="margin (1)", title="realizability margin (0: the realization cannot act)")
     for ax in axes:

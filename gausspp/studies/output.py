@@ -96,8 +96,8 @@ def _draw(plt: Any, traj: Trajectory, title: str, scene: scenes.Scene | None = N
 
 
 def plot_trajectory(traj: Trajectory, title: str, base: Path, scene: scenes.Scene | None = None) -> Path | None:
-    """q(t) and v(t) as ``<base>.png`` (or ``base`` itself if it names a figure file), labelled with ``scene``'s coordinate names and units; None (with a note
-    on stdout) without matplotlib."""
+    """q(t) and v(t) as ``<base>.png`` (or ``base`` itself if it names a figure file), labelled with ``scene``'s
+    coordinate names and units; None (with a note on stdout) without matplotlib."""
     try:
         plt = plot.pyplot()
     except GaussppError as exc:
