@@ -25,7 +25,9 @@ if best is not None:
         f"{best.wall_time * 1e3:.1f} ms"
     )
 
-fig = plot.work_precision(rows, "pendulum")
+p = gp.scenes.get("pendulum").params  # the parameters the study ran with, for the title
+units = f"m = {p['m']:g} kg, Ic = {p['Ic']:g} kg·m², L = {p['L']:g} m, g = {p['g']:g} m/s², t_end = {p['t_end']:g} s"
+fig = plot.work_precision(rows, "pendulum", title=units)
 out = sys.argv[1] if len(sys.argv) > 1 else "error_vs_runtime.png"
 fig.savefig(out, dpi=110, bbox_inches="tight")
 print(f"work-precision diagram written to {out}")

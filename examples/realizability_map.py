@@ -13,11 +13,12 @@ import sys
 import numpy as np
 
 from gausspp import plot
+from gausspp.studies.realizability_map import realizability_grid
 
 inertia = (1.0, 2.0, 3.0)
 l = (1.0, 1.0, 1.0)  # not a principal axis
 
-grid = plot.realizability_grid(inertia, l, resolution=1.0)
+grid = realizability_grid(inertia, l, resolution=1.0)
 print(f"I = diag{inertia}, l = {np.round(grid.l, 3)}; I⁻¹l points along {np.round(grid.pole, 3)}")
 print(
     f"on the naive circle n ⟂ l the margin runs from {grid.naive_margin.min():.3f} to "
@@ -25,13 +26,13 @@ print(
 )
 print(f"on the true zero set (I⁻¹n, l) = 0 it is at most {grid.true_margin.max():.1e}: these axes cannot act")
 
-principal = plot.realizability_grid(inertia, (0.0, 0.0, 1.0))
+principal = realizability_grid(inertia, (0.0, 0.0, 1.0))
 print(
     f"for the principal axis l = (0, 0, 1) the two circles coincide: margin on n ⟂ l at most "
     f"{principal.naive_margin.max():.1e}"
 )
 
-fig = plot.realizability_map(grid=grid)
+fig = plot.realizability_map(grid=grid, scene="rigid-body-servo")
 out = sys.argv[1] if len(sys.argv) > 1 else "realizability_map.png"
 fig.savefig(out, dpi=110, bbox_inches="tight")
 print(f"map of the margin over the sphere of axes n written to {out}")

@@ -67,12 +67,15 @@ tool = ca.Function("p", [mech.q], [gp.frame_position(mech, "tool0")])
 xyz = np.array([np.array(tool(q)).ravel() for q in traj.q])
 ax_path.plot(*xyz.T, color="#0072B2", lw=2.5, label="tool (computed motion)")
 ax_path.plot(*(p0 + np.outer(1 - np.cos(2 * traj.t[::40]), d)).T, "o", ms=3, color="#D55E00", label="p(t) prescribed")
-ax_path.set(xlabel="x [m]", ylabel="y [m]", zlabel="z [m]", title="UR5 tool path (1.2 s)")
+ax_path.set(xlabel="x (m)", ylabel="y (m)", zlabel="z (m)", title=f"tool path, t = 0 … {T:g} s")
 ax_path.legend(fontsize=8)
-for name, tau in zip(traj.labels.coordinate, traj.reaction.T, strict=True):
-    ax_torque.plot(traj.t, tau, label=name)
+for i, (name, tau) in enumerate(zip(traj.labels.coordinate, traj.reaction.T, strict=True)):
+    ax_torque.plot(traj.t, tau, color=plot.base.palette(i), label=name)
 ax_torque.plot(traj.t[::40], rnea[::40], "k.", ms=2)
-ax_torque.set(xlabel="t [s]", ylabel="joint torque [N m]", title="joint torques (dots: Pinocchio RNEA)")
+ax_torque.set(xlabel="time t (s)", ylabel="joint torque (N·m)", title="joint torques (dots: Pinocchio RNEA)")
+fig.suptitle(
+    f"scene ur5-tool-path: UR5 tool follows p₀ + (1 − cos 2t) d, d = {plot.base.vec(d)} m, by its 6 joint torques"
+)
 ax_torque.legend(fontsize=7, ncol=2)
 out = sys.argv[1] if len(sys.argv) > 1 else "robot_arm_servo.png"
 fig.savefig(out, dpi=100)

@@ -40,7 +40,12 @@ print(
     f"{np.nanmax(np.abs(ok.multipliers[inside, 0] - path.u[inside, 0])):.1e}"
 )
 
-fig = plot.verification(checks, path)
+p = rod.params
+title = (
+    f"scene two-masses: m1 = {p['m1']:g} kg, m2 = {p['m2']:g} kg, F = {p['F']:g} N, spring k = {p['k']:g} N/m, "
+    f"v0 = {p['v']:g} m/s, t = 0 … {t_end:g} s"
+)
+fig = plot.verification(checks, path, title=title)
 out = sys.argv[1] if len(sys.argv) > 1 else "verify_a_trajectory.png"
 fig.savefig(out, dpi=110, bbox_inches="tight")
 print(f"figure (minimizing variation δx(t) and the gap, passing and failing) written to {out}")

@@ -123,8 +123,10 @@ residual, energy balance, realizability margin (and the error against the
 exact motion where the scene knows it). With --out DIR, write DIR/SCENE.npz
 (every array, the model's names, the run's settings), DIR/SCENE.csv and
 DIR/SCENE.png; with --out FILE.npz or FILE.nc (netCDF, needs gausspp[data]),
-that one file. Both read back by gausspp.load_trajectory (then gp.verify). A
-run that fails midway still writes what it computed, then exits with 1.
+that one file. Both read back by gausspp.load_trajectory (then gp.verify).
+With --out FIG.png (or .svg, .pdf), only the figure of q(t) and v(t), labelled
+with the scene's coordinates and units. A run that fails midway still writes
+what it computed, then exits with 1.
 With --animate FILE.gif (or .mp4), draw the mechanism moving (scenes that
 carry a drawing; needs matplotlib).
 

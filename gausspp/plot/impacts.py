@@ -118,11 +118,11 @@ def _energy_panel(ax: Any, t: np.ndarray, traj: Any) -> None:
         [t[0], *(key[0] for key in jumps), t[-1]],
         [0.0, *np.cumsum(losses), float(np.sum(losses))],
         where="post",
-        color="tab:red",
+        color=palette(3),
         lw=1.2,
         label=f"kinetic energy lost at impacts ({len(jumps)} jumps)",
     )
-    ax.set(xlabel="time t", ylabel="energy", title="energy, and the kinetic energy lost at impacts")
+    ax.set(xlabel="time t (s)", ylabel="energy (J)", title="energy, and the kinetic energy lost at impacts")
 
 
 def contacts(model: Any, traj: Any, *, title: str | None = None) -> Any:
@@ -167,8 +167,8 @@ def contacts(model: Any, traj: Any, *, title: str | None = None) -> Any:
         force_ax.plot(t, traj.contact_force[:, i], color=colors(i % 10), lw=1.2, label=f"force on {name}")
     gap_ax.axhline(0.0, color="k", ls=":", lw=0.8)
     _mark_events(gap_ax, names, traj.events, colors)
-    gap_ax.set(ylabel="gap g", title="gaps g(t) of the contacts (g ≥ 0; events marked at g = 0)")
-    force_ax.set(ylabel="contact force", title="contact forces (multipliers ≥ 0; zero in flight)")
+    gap_ax.set(ylabel="gap g (m)", title="gaps g(t) of the contacts (g ≥ 0; events marked at g = 0)")
+    force_ax.set(ylabel="contact force (N)", title="contact forces (multipliers ≥ 0; zero in flight)")
     _energy_panel(energy_ax, t, traj)
     for ax in (gap_ax, force_ax, energy_ax):
         ax.grid(True, alpha=0.3)

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ShapeError
+from ..scenes.scene import velocity_names
 from .base import MARGIN_WARN, MARKERS, STYLES, as_runs, carried_names, labels, legend, palette, pyplot, suffix
 
 
@@ -34,7 +35,7 @@ def _difference_panels(axes: Any, runs: Mapping[str, Any], ql: Sequence[str], vl
             diff = np.interp(a.t, b.t, xb[:, i]) - xa[:, i]
             ax.plot(a.t, diff, STYLES[i % len(STYLES)], color=palette(i), label=f"Δ{names[i]}")
         ax.axhline(0.0, color="k", lw=0.6)
-        ax.set(xlabel="time t", ylabel=f"Δ {what}", title=f"difference of the {what}: {nb} − {na}")
+        ax.set(xlabel="time t (s)", ylabel=f"Δ {what}", title=f"difference of the {what}: {nb} − {na}")
 
 
 def _run_lines(axes: Any, runs: Mapping[str, Any], ql: Sequence[str], vl: Sequence[str], phase: bool) -> None:
@@ -59,6 +60,7 @@ def trajectory(
     difference: bool = False,
     q_labels: Sequence[str] | None = None,
     v_labels: Sequence[str] | None = None,
+    names: Sequence[str] | None = None,
     title: str | None = None,
 ) -> Any:
     """Coordinates and velocities over time, and optionally the phase portrait and two runs' difference.
@@ -80,7 +82,12 @@ def trajectory(
     difference : bool
         Add the row of differences; needs exactly two runs.
     q_labels, v_labels : sequence of str, optional
-        Names of the components (default: the names the first run carries from its model, else ``q₁…``, ``v₁…``).
+        Names of the components (default: from ``names``, else the names the first run carries from its model,
+        else ``q₁…``, ``v₁…``).
+    names : sequence of str, optional
+        The coordinates' names with units (a scene's :attr:`~gausspp.scenes.Scene.coordinates`, ``"x (m)"``): the
+        labels of ``q``, and, dotted (:func:`~gausspp.scenes.scene.velocity_names`, ``"ẋ (m/s)"``), of ``v`` where
+        ``v = q̇`` (``nq == nv``).
     title : str, optional
 
     Returns
@@ -94,6 +101,9 @@ def trajectory(
     if difference and len(runs) != 2:
         raise InputError(f"difference=True draws the second run minus the first; got {len(runs)} runs, give two")
     first = next(iter(runs.values()))
+    if names is not None:
+        q_labels = q_labels if q_labels is not None else names
+        v_labels = v_labels if v_labels is not None or len(names) != nv else velocity_names(names)
     q_labels = q_labels if q_labels is not None else carried_names(first, "coordinate", nq)
     v_labels = v_labels if v_labels is not None else carried_names(first, "velocity", nv)
     ql, vl = labels(q_labels, nq, "q"), labels(v_labels, nv, "v")
@@ -101,8 +111,8 @@ def trajectory(
     fig, grid = plt.subplots(nrows, ncols, figsize=(4.8 * ncols, 4.0 * nrows), layout="constrained", squeeze=False)
     axes = list(grid[0])
     _run_lines(axes, runs, ql, vl, phase)
-    axes[0].set(xlabel="time t", ylabel="coordinates q", title="coordinates over time")
-    axes[1].set(xlabel="time t", ylabel="velocities v", title="velocities over time")
+    axes[0].set(xlabel="time t (s)", ylabel="coordinates q (units in legend)", title="coordinates over time")
+    axes[1].set(xlabel="time t (s)", ylabel="velocities v (units in legend)", title="velocities over time")
     if phase:
         axes[2].set(xlabel="coordinate $q_i$", ylabel="velocity $v_i$", title="phase portrait (start: dot)")
     if difference:
@@ -170,11 +180,14 @@ def reaction_over_time(traj: Any, *, title: str | None = None) -> Any:
     runs = as_runs(traj, "trajectories")
     fig, axes = plt.subplots(3, 1, figsize=(8.0, 7.5), sharex=True, layout="constrained")
     lowest = _reaction_panels(axes, runs, palette)
-    axes[2].axhline(MARGIN_WARN, color="tab:red", ls=":", lw=1, label=f"default warning level {MARGIN_WARN:g}")
+    axes[2].axhline(MARGIN_WARN, color=palette(3), ls=":", lw=1, label=f"default warning level {MARGIN_WARN:g}")
     axes[2].set_ylim(min(lowest / 3, MARGIN_WARN / 10), 2.0)
-    axes[0].set(ylabel="u", title=r"reaction unknowns $u$: $\lambda$ (ideal, force) or $\dot\lambda$ (flywheel)")
-    axes[1].set(ylabel="Z", title=r"compulsion $Z = (A(\ddot x - a_0), \ddot x - a_0)$")
-    axes[2].set(xlabel="time t", ylabel="margin", title="realizability margin (0: the realization cannot act)")
+    axes[0].set(
+        ylabel="u (N, N·m: per row)",
+        title=r"reaction unknowns $u$: $\lambda$ (ideal, force) or $\dot\lambda$ (flywheel)",
+    )
+    axes[1].set(ylabel="Z (N²/kg)", title=r"compulsion $Z = (A(\ddot x - a_0), \ddot x - a_0)$")
+    axes[2].set(xlabel="time t (s)", ylabel="margin (1)", title="realizability margin (0: the realization cannot act)")
     for ax in axes:
         ax.grid(True, which="both", alpha=0.3)
         legend(ax)

@@ -6,13 +6,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from .base import STYLES, pyplot
+from .base import STYLES, palette, pyplot
 
 #: Markers telling the step solvers apart (with the line styles).
 MARKERS = ("o", "s", "^", "D")
 
 
-def work_precision(rows: Sequence[Any], scene: str, ax: Any = None) -> Any:
+def work_precision(rows: Sequence[Any], scene: str, ax: Any = None, *, title: str | None = None) -> Any:
     """Final-state error against wall time, log–log, one line per method and step solver.
 
     Each point is one run of :func:`gausspp.report.work_precision` (a step size or a tolerance
@@ -26,6 +26,9 @@ def work_precision(rows: Sequence[Any], scene: str, ax: Any = None) -> Any:
         The scene whose rows are drawn.
     ax : matplotlib axes, optional
         Where to draw (else a new figure).
+    title : str, optional
+        The scene's parameters with units (``"m = 1 kg, L = 1 m, t_end = 1 s"``), put after the scene's name in
+        the title.
     """
     plt = pyplot()
     fig = ax.figure if ax is not None else plt.figure(figsize=(7, 4.5))
@@ -33,7 +36,6 @@ def work_precision(rows: Sequence[Any], scene: str, ax: Any = None) -> Any:
     mine = [r for r in rows if r.scene == scene and r.status == "success" and r.final_error > 0]
     methods = list(dict.fromkeys(r.method for r in mine))
     solvers = list(dict.fromkeys(r.solver for r in mine))
-    colors = plt.get_cmap("tab10")
     for key in dict.fromkeys((r.method, r.solver) for r in mine):
         pts = [(r.wall_time, r.final_error) for r in mine if (r.method, r.solver) == key]  # in sweep order
         m, s_ = methods.index(key[0]), solvers.index(key[1]) % len(STYLES)
@@ -41,15 +43,16 @@ def work_precision(rows: Sequence[Any], scene: str, ax: Any = None) -> Any:
             *zip(*pts, strict=True),
             linestyle=STYLES[s_],
             marker=MARKERS[s_],
-            color=colors(m % 10),
+            color=palette(m),
             label=f"{key[0]} · {key[1]}",
             ms=4,
         )
     failed = sum(1 for r in rows if r.scene == scene and r.status != "success")
+    head = f"scene {scene}" + (f" ({title})" if title else "")
     ax.set(
-        xlabel="wall time [s] (minimum of repeats)",
-        ylabel="final-state error (mixed abs/rel)",
-        title=f"{scene}: error against run time" + (f" ({failed} failed runs in the table)" if failed else ""),
+        xlabel="wall time (s), minimum of repeats",
+        ylabel="final-state error (1): max |x − x_ref| / max(1, |x_ref|)",
+        title=f"{head}: error against run time" + (f" ({failed} failed runs in the table)" if failed else ""),
     )
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), title="method · step solver")

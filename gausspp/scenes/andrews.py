@@ -334,6 +334,7 @@ def build(t_end: float = REFERENCE_T) -> Scene:
         model=Model(mechanism, constraints),
         q0=Q0.copy(),
         v0=V0.copy(),
+        coordinates=("β (rad)", "Θ (rad)", "γ (rad)", "Φ (rad)", "δ (rad)", "Ω (rad)", "ε (rad)"),
         lam0=None,
         t_end=float(t_end),
         exact=None,

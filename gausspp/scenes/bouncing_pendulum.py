@@ -62,6 +62,7 @@ def build(
         model=model,
         q0=q0,
         v0=np.zeros(2),
+        coordinates=("x (m)", "z (m)"),
         lam0=None,
         t_end=t_end,
         exact=None,

@@ -129,6 +129,7 @@ def build(
         model=model,
         q0=q0,
         v0=v0,
+        coordinates=("x (m)", "θ (rad)"),
         lam0=None,
         t_end=float(t_end),
         exact=exact,

@@ -46,7 +46,7 @@ from ..errors import InputError, UnknownNameError
 from ..model.constraints import Holonomic
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
-from .scene import Scene
+from .scene import Scene, numbered
 
 THIRD_ROWS = ("oblique", "distance")
 
@@ -117,6 +117,7 @@ def build(
         model=model,
         q0=q0,
         v0=v0,
+        coordinates=numbered(["θ (rad)"], 3),
         lam0=None,
         t_end=float(t_end),
         exact=None,

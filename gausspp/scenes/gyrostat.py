@@ -26,7 +26,7 @@ from ..model.constraints import Constraint
 from ..model.mechanism import RigidBody
 from ..model.model import Model
 from ..model.realizations import Inertial
-from .rigid import body_axes_drawing, inertia_matrix, on_plane, unit_vector
+from .rigid import OMEGA, QUATERNION, body_axes_drawing, inertia_matrix, on_plane, unit_vector
 from .scene import Scene
 
 
@@ -59,6 +59,8 @@ def build(
         model=model,
         q0=np.array([1.0, 0.0, 0.0, 0.0]),
         v0=on_plane("gyrostat", omega0, l_),
+        coordinates=QUATERNION,
+        velocities=OMEGA,
         lam0=lam,
         t_end=t_end,
         exact=None,

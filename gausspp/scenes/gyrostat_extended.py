@@ -31,7 +31,7 @@ from ..model.constraints import Constraint
 from ..model.mechanism import MassMatrix
 from ..model.model import Model
 from ..model.realizations import Force
-from .rigid import body_axes_drawing, inertia_matrix, on_plane, unit_vector
+from .rigid import OMEGA, QUATERNION, body_axes_drawing, inertia_matrix, on_plane, unit_vector
 from .scene import Scene
 
 
@@ -74,6 +74,8 @@ def build(
         model=model,
         q0=np.array([1.0, 0.0, 0.0, 0.0, float(theta0)]),
         v0=np.append(w0, theta_dot0),
+        coordinates=(*QUATERNION, "θ (rad)"),
+        velocities=(*OMEGA, "θ̇ (rad/s)"),
         lam0=None,
         t_end=t_end,
         exact=None,

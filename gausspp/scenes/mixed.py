@@ -74,6 +74,7 @@ def build(
         model=model,
         q0=np.array([float(x0), 0.0]),
         v0=np.zeros(2),
+        coordinates=("x (m)", "y (m)"),
         lam0=np.array([float(lam0)]),
         t_end=t_end,
         exact=None,

@@ -124,6 +124,7 @@ def build(
         model=model,
         q0=np.array([0.0, float(L0), 0.0]),
         v0=np.zeros(3),
+        coordinates=("s (m)", "l (m)", "θ (rad)"),
         lam0=None,
         t_end=float(T),
         exact=exact,

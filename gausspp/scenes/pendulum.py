@@ -85,6 +85,7 @@ def build(
         model=model,
         q0=q0,
         v0=v0,
+        coordinates=("x (m)", "z (m)", "φ (rad)"),
         lam0=None,
         t_end=t_end,
         exact=exact,

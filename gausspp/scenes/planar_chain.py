@@ -37,7 +37,10 @@ from ..model.constraints import Holonomic
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
 from . import pendulum
-from .scene import Scene
+from .scene import Scene, numbered
+
+#: One bar's coordinates: its centre of mass and its angle from the x axis.
+BAR = ("x (m)", "z (m)", "θ (rad)")
 
 
 def end(q: Any, link: int, sign: int, L: float) -> Any:
@@ -100,6 +103,7 @@ def build(
         model=model,
         q0=straight(N, L, theta0),
         v0=np.zeros(3 * N),
+        coordinates=numbered(BAR, N),
         lam0=None,
         t_end=float(t_end),
         exact=exact,
@@ -146,6 +150,7 @@ def build_planar_ladder(
         model=model,
         q0=q0,
         v0=np.zeros(9 * N),
+        coordinates=numbered(BAR, 3 * N),
         lam0=None,
         t_end=float(t_end),
         exact=None,

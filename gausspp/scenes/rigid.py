@@ -10,6 +10,10 @@ from scipy.spatial.transform import Rotation
 from ..errors import InputError, ShapeError
 from ..validation import array
 
+#: A rigid body's coordinates (the unit quaternion body → space, dimensionless) and velocities (ω, body axes).
+QUATERNION = ("q_w (1)", "q_x (1)", "q_y (1)", "q_z (1)")
+OMEGA = ("ω₁ (rad/s)", "ω₂ (rad/s)", "ω₃ (rad/s)")
+
 
 def unit_vector(scene: str, name: str, value: Any) -> np.ndarray:
     """``value`` as a unit 3-vector, or a clear error naming the scene and the parameter."""

@@ -17,7 +17,7 @@ from ..model.constraints import Constraint
 from ..model.mechanism import RigidBody
 from ..model.model import Model
 from ..model.realizations import Force
-from .rigid import body_axes_drawing, inertia_matrix, on_plane, unit_vector
+from .rigid import OMEGA, QUATERNION, body_axes_drawing, inertia_matrix, on_plane, unit_vector
 from .scene import Scene
 
 
@@ -46,6 +46,8 @@ def build(
         model=model,
         q0=np.array([1.0, 0.0, 0.0, 0.0]),
         v0=w0,
+        coordinates=QUATERNION,
+        velocities=OMEGA,
         lam0=None,
         t_end=t_end,
         exact=None,

@@ -80,6 +80,7 @@ def build(
         model=model,
         q0=base.q0,
         v0=base.v0,
+        coordinates=base.coordinates,
         lam0=None,
         t_end=float(t_end),
         exact=None,

@@ -7,7 +7,7 @@ import ast
 import inspect
 import sys
 import textwrap
-from collections.abc import Callable, Collection
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -44,6 +44,12 @@ class Scene:
         What to draw of the mechanism at ``q`` in the plane (:func:`gausspp.plot.animate`): ``"segments"`` (pairs
         of points), ``"points"`` (bodies), ``"fixed"`` (pins), ``"path"`` (a prescribed path, ``(K, 2)``),
         ``"reaction"`` (``(point, (i, j))``: the arrow ``(R[i], R[j])`` of the generalized reaction at ``point``).
+    coordinates : tuple of str or None
+        The name and unit of each coordinate ``q_i``, e.g. ``("x (m)", "z (m)", "θ (rad)")``: the labels of the
+        figures (``gausspp run SCENE --out DIR`` draws ``q(t)`` with them). ``len(coordinates) == nq``.
+    velocities : tuple of str or None
+        The name and unit of each velocity ``v_i``, given only where ``v`` is not ``q̇`` (a rigid body's
+        quaternion and ``ω``); otherwise :attr:`velocity_names` derives them from :attr:`coordinates`.
     """
 
     name: str
@@ -57,6 +63,53 @@ class Scene:
     params: dict[str, Any] = field(default_factory=dict)
     forces: Callable[[float], np.ndarray] | None = None
     drawing: Callable[[np.ndarray], dict[str, Any]] | None = None
+    coordinates: tuple[str, ...] | None = None
+    velocities: tuple[str, ...] | None = None
+
+    @property
+    def velocity_names(self) -> tuple[str, ...] | None:
+        """The velocities' names and units: :attr:`velocities` if given, else those of :attr:`coordinates` dotted
+        (:func:`velocity_names`), else None."""
+        if self.velocities is not None:
+            return self.velocities
+        return velocity_names(self.coordinates) if self.coordinates is not None else None
+
+
+#: A coordinate's unit → its velocity's unit.
+_RATE_UNITS = {"(m)": "(m/s)", "(rad)": "(rad/s)", "(1)": "(1/s)"}
+
+
+def velocity_name(coordinate: str) -> str:
+    """The name of the velocity ``q̇`` of a coordinate named ``coordinate`` (name, then unit in parentheses).
+
+    A symbol (one letter, with subscripts) gets a dot over it, ``"x₁ (m)" → "ẋ₁ (m/s)"``; a longer name gets a
+    ``d/dt``, ``"elbow (rad)" → "d/dt elbow (rad/s)"``. The unit ``(u)`` becomes ``(u/s)``.
+    """
+    name, _, unit = coordinate.partition(" (")
+    unit = f"({unit}" if unit else ""
+    rate = _RATE_UNITS.get(unit, f"{unit[:-1]}/s)" if unit else "")
+    symbol = name[:1] + "\u0307" + name[1:] if name[1:].strip("₀₁₂₃₄₅₆₇₈₉") == "" else f"d/dt {name}"
+    return f"{symbol} {rate}".strip()
+
+
+def subscript(i: int) -> str:
+    """``i`` in subscript digits: ``12 → "₁₂"``."""
+    return str(i).translate(str.maketrans("0123456789", "₀₁₂₃₄₅₆₇₈₉"))
+
+
+def numbered(symbols: Sequence[str], count: int, start: int = 1) -> tuple[str, ...]:
+    """``count`` bodies' coordinates named ``symbols`` (each ``"name (unit)"``), numbered from ``start``:
+    ``numbered(["x (m)", "θ (rad)"], 2) == ("x₁ (m)", "θ₁ (rad)", "x₂ (m)", "θ₂ (rad)")``."""
+    return tuple(
+        f"{name}{subscript(i)} ({unit}"
+        for i in range(start, start + count)
+        for name, _, unit in (s.partition(" (") for s in symbols)
+    )
+
+
+def velocity_names(coordinates: Sequence[str]) -> tuple[str, ...]:
+    """:func:`velocity_name` of each coordinate: the names of ``v = q̇``."""
+    return tuple(velocity_name(c) for c in coordinates)
 
 
 # -- parameters: every scene's, checked by type in one place ---------------------------------------

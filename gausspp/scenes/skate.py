@@ -98,6 +98,7 @@ def build(
         model=model,
         q0=q0,
         v0=qd0,
+        coordinates=("x (m)", "y (m)", "θ (rad)"),
         lam0=np.array([float(lam0)]) if vakonomic else None,
         t_end=float(t_end),
         exact=None if vakonomic else exact_nonholonomic(q0, float(v0), float(omega0)),

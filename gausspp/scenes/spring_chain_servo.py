@@ -36,7 +36,7 @@ from ..model.mechanism import Lagrangian
 from ..model.model import Model
 from ..model.realizations import Force
 from . import smooth_paths
-from .scene import Scene
+from .scene import Scene, numbered
 
 #: Largest chain (the servo route differentiates ``yd`` ``2n`` times).
 MAX_MASSES = 6
@@ -81,6 +81,7 @@ def build(n: int = 3, m: float = 1.0, k: float = 4.0, T: float = 4.0, distance: 
         model=_model(n, m, k, yd, T),
         q0=np.zeros(n),
         v0=np.zeros(n),
+        coordinates=numbered(["x (m)"], n),
         lam0=None,
         t_end=float(T),
         exact=exact,

@@ -30,7 +30,7 @@ from ..model.constraints import Constraint
 from ..model.mechanism import Lagrangian
 from ..model.model import Model
 from ..model.realizations import Force, Ideal, Realization
-from .scene import Scene
+from .scene import Scene, numbered
 
 REALIZATIONS = ("ideal", "servo")
 
@@ -77,6 +77,7 @@ def build(
         model=model,
         q0=q0,
         v0=v0,
+        coordinates=numbered(["x (m)"], n, start=0),
         lam0=None,
         t_end=t_end,
         exact=_modal_solution(L, q0, v0),

@@ -115,6 +115,7 @@ def build(
         model=model,
         q0=q0,
         v0=v0,
+        coordinates=("x (m)", "y (m)", "θ (rad)"),
         lam0=None,
         t_end=t_end,
         exact=exact,

@@ -66,6 +66,7 @@ def build(
         model=model,
         q0=q0,
         v0=v0,
+        coordinates=("x₁ (m)", "x₂ (m)"),
         lam0=None,
         t_end=t_end,
         exact=exact,

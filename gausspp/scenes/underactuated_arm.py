@@ -78,6 +78,7 @@ def build(d: Any = (0.05, 0.04), t_end: float = 0.5) -> Scene:
         model=arm_model(mech, offset),
         q0=np.array(Q0),
         v0=np.zeros(3),
+        coordinates=tuple(f"{joint} (rad)" for joint in mech.joint_names),
         lam0=None,
         t_end=float(t_end),
         exact=None,

@@ -89,6 +89,7 @@ def build(d: Any = (0.08, 0.05, -0.04), t_end: float = 1.2) -> Scene:
         model=model,
         q0=q0,
         v0=np.zeros(6),
+        coordinates=tuple(f"{joint} (rad)" for joint in mech.joint_names),
         lam0=None,
         t_end=float(t_end),
         exact=None,

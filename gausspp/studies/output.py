@@ -37,12 +37,19 @@ def columns(traj: Trajectory) -> tuple[list[str], np.ndarray]:
 
 #: The suffixes that make ``--out`` one trajectory file rather than a directory.
 FILE_SUFFIXES = (".npz", ".nc")
+#: The suffixes that make ``--out`` the figure of ``q(t)`` and ``v(t)`` alone.
+FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
 
 
 def write_trajectory(traj: Trajectory, scene: scenes.Scene, params: dict[str, Any], out: Path) -> list[Path]:
     """``out`` a ``.npz`` or ``.nc`` file: the trajectory in :meth:`~gausspp.Trajectory.save`'s format (with the
     scene and its parameters), read back by :func:`gausspp.load_trajectory`. Otherwise ``out`` is a directory:
-    ``<scene>.npz`` (the same format), ``<scene>.csv`` and, with matplotlib, ``<scene>.png``."""
+    ``<scene>.npz`` (the same format), ``<scene>.csv`` and, with matplotlib, ``<scene>.png``. ``out`` a ``.png``,
+    ``.svg`` or ``.pdf`` file: that figure alone (labelled with the scene's coordinates and their units)."""
+    if out.suffix.lower() in FIGURE_SUFFIXES:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        png = plot_trajectory(traj, f"{label(scene.name, params)} · {traj.method} · {traj.status}", out, scene)
+        return [png] if png is not None else []
     attrs = dict(scene=scene.name, params=json.dumps(params, default=repr))
     try:
         if out.suffix.lower() in FILE_SUFFIXES:
@@ -57,15 +64,18 @@ def write_trajectory(traj: Trajectory, scene: scenes.Scene, params: dict[str, An
     except OSError as exc:
         raise GaussppError(f"cannot write to {out}: {exc.strerror or exc}") from exc
     if len(traj):
-        png = plot_trajectory(traj, f"{label(scene.name, params)} · {traj.method} · {traj.status}", base)
+        png = plot_trajectory(traj, f"{label(scene.name, params)} · {traj.method} · {traj.status}", base, scene)
         if png is not None:
             files.append(png)
     return files
 
 
-def _draw(plt: Any, traj: Trajectory, title: str) -> Any:
-    """q(t) and v(t): ``gausspp.plot.trajectory`` if there is one, else two plain panels."""
+def _draw(plt: Any, traj: Trajectory, title: str, scene: scenes.Scene | None = None) -> Any:
+    """q(t) and v(t): ``gausspp.plot.trajectory`` if there is one (labelled with the scene's coordinates), else
+    two plain panels."""
     drawer = getattr(plot, "trajectory", None)
+    if drawer is not None and "names" in inspect.signature(drawer).parameters and scene is not None:
+        return drawer(traj, title=title, names=scene.coordinates, v_labels=scene.velocity_names)
     if drawer is not None and "title" in inspect.signature(drawer).parameters:
         return drawer(traj, title=title)
     if drawer is not None:
@@ -85,15 +95,16 @@ def _draw(plt: Any, traj: Trajectory, title: str) -> Any:
     return fig
 
 
-def plot_trajectory(traj: Trajectory, title: str, base: Path) -> Path | None:
-    """q(t) and v(t) as ``<base>.png``; None (with a note on stdout) without matplotlib."""
+def plot_trajectory(traj: Trajectory, title: str, base: Path, scene: scenes.Scene | None = None) -> Path | None:
+    """q(t) and v(t) as ``<base>.png`` (or ``base`` itself if it names a figure file), labelled with ``scene``'s
+    coordinate names and units; None (with a note on stdout) without matplotlib."""
     try:
         plt = plot.pyplot()
     except GaussppError as exc:
         print(f"(no plot: {exc})")
         return None
-    fig = _draw(plt, traj, title)
-    path = base.with_suffix(".png")
+    fig = _draw(plt, traj, title, scene)
+    path = base if base.suffix.lower() in FIGURE_SUFFIXES else base.with_suffix(".png")
     try:
         fig.savefig(path, dpi=110, bbox_inches="tight")
     except OSError as exc:
