@@ -10,6 +10,7 @@ from __future__ import annotations
 import inspect
 import os
 import re
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -64,14 +65,37 @@ SLOW_EXAMPLES = [
 SKIP_SLOW = bool(os.environ.get("GAUSSPP_DOCS_SKIP_SLOW"))
 _slow = "|".join(re.escape(name) for name in SLOW_EXAMPLES)
 
-# Each example takes its figure's file name in argv[1]; in the build it goes to a scratch directory,
-# not into examples/ (the gallery shows the figure captured from matplotlib).
+# Each example takes its figure's file name in argv[1] and, if it animates, its GIF's in argv[2]; in the
+# build both go to a scratch directory, not into examples/. The gallery shows the figures captured from
+# matplotlib and the GIFs the examples wrote (GifScraper).
 _FIGURES = Path(tempfile.mkdtemp(prefix="gausspp-docs-"))
 
 
 def _example_argv(gallery_conf: dict, script_vars: dict) -> list[str]:
-    """Pass the example an output path in a scratch directory."""
-    return [str(_FIGURES / (Path(script_vars["src_file"]).stem + ".png"))]
+    """Pass the example its figure's and its animation's paths in a scratch directory."""
+    src = Path(script_vars["src_file"])
+    argv = [str(_FIGURES / f"{src.stem}.png")]
+    if "plot.animate(" in src.read_text():
+        argv.append(str(_FIGURES / f"{src.stem}.gif"))
+    return argv
+
+
+class GifScraper:
+    """Show the GIF an example wrote (``gausspp.plot.animate(..., out=argv[2])``) after the code block that wrote
+    it: moved into the gallery's images, one image per GIF (sphinx-gallery's custom image scraper protocol)."""
+
+    def __repr__(self) -> str:  # a stable name: the gallery's cache compares configurations by repr
+        return "GifScraper"
+
+    def __call__(self, block: object, block_vars: dict, gallery_conf: dict) -> str:
+        from sphinx_gallery.scrapers import figure_rst
+
+        gif = _FIGURES / (Path(block_vars["src_file"]).stem + ".gif")
+        if not gif.is_file():
+            return ""
+        target = Path(next(block_vars["image_path_iterator"])).with_suffix(".gif")
+        shutil.move(gif, target)
+        return figure_rst([target], gallery_conf["src_dir"])
 
 
 sphinx_gallery_conf = {
@@ -80,7 +104,7 @@ sphinx_gallery_conf = {
     # executed: every script, or all but the slow ones (these still appear, code without output)
     "filename_pattern": rf"/(?!({_slow})$)[^/]+\.py$" if SKIP_SLOW else r"/[^/]+\.py$",
     "ignore_pattern": r"__init__\.py$",
-    "image_scrapers": ("matplotlib",),
+    "image_scrapers": ("matplotlib", GifScraper()),
     "reset_argv": _example_argv,
     "download_all_examples": True,
     "remove_config_comments": True,

@@ -9,7 +9,7 @@ already resting when the other one lands takes part in that impact: it is listed
 at speed ≈ 0 (the squares of one colour while the other corner bounces).
 Dropped flat, it bounces like a point mass at closed-form times.
 The figure shows the gaps, the contact forces and the energy (``gausspp.plot.contacts``).
-Run: python examples/bouncing_block.py [output.png]
+Run: python examples/bouncing_block.py [output.png [animation.gif]]
 """
 
 import sys
@@ -97,3 +97,15 @@ fig = plot.contacts(
 out = sys.argv[1] if len(sys.argv) > 1 else "bouncing_block.png"
 fig.savefig(out, dpi=100)
 print(f"\nfigure (gaps, contact forces, energy over time) written to {out}")
+
+# %%
+# The tilted block rocking to rest: its outline, the way its centre of mass goes, and the sum of the
+# contact forces at the centre of mass (zero in flight, ``m g`` at rest).
+anim = plot.animate(
+    scene,
+    traj,
+    frames=50,
+    fps=10,
+    out=sys.argv[2] if len(sys.argv) > 2 else None,
+    title=f"block {p['w']} m × {p['h']} m tilted {p['tilt']} rad, e = {p['e']}: rocking to rest",
+)

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import gausspp as gp
 from gausspp import cli
@@ -46,9 +48,9 @@ def test_fewer_samples_than_frames_gives_one_frame_per_sample(tmp_path: Path) ->
 
 
 def test_a_scene_or_model_without_a_drawing_is_refused(tmp_path: Path) -> None:
-    scene = gp.scenes.get("skate")
+    scene = gp.scenes.get("crane")
     traj = gp.simulate(scene.model, scene.q0, scene.v0, 0.1)
-    with pytest.raises(InputError, match="'skate' has no drawing"):
+    with pytest.raises(InputError, match="'crane' has no drawing"):
         gp.plot.animate(scene, traj, out=tmp_path / "x.gif")
     with pytest.raises(InputError, match="has no drawing.*a Model carries none"):
         gp.plot.animate(scene.model, traj)
@@ -73,8 +75,8 @@ def test_the_run_command_writes_an_animation(tmp_path: Path, capsys: pytest.Capt
 
 
 def test_the_run_command_refuses_a_scene_without_a_drawing(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    out = tmp_path / "skate.gif"
-    code = cli.main(["run", "skate", "--t-end", "0.1", "--animate", str(out), "--quiet"])
+    out = tmp_path / "crane.gif"
+    code = cli.main(["run", "crane", "--t-end", "0.1", "--animate", str(out), "--quiet"])
     assert code == 1
     assert "no drawing" in capsys.readouterr().err
     assert not out.exists()
@@ -87,3 +89,107 @@ def test_without_matplotlib_the_project_error(monkeypatch: pytest.MonkeyPatch) -
     scene = gp.scenes.get("pendulum")
     with pytest.raises(GaussppError, match=r"gausspp\[plots\]"):
         gp.plot.animate(scene, object())
+
+
+def _sim(scene: gp.scenes.Scene, samples: int = 61) -> gp.Trajectory:
+    times = np.linspace(0.0, scene.t_end, samples)
+    return gp.simulate(scene.model, scene.q0, scene.v0, scene.t_end, lam0=scene.lam0, record=times)
+
+
+@pytest.mark.parametrize(
+    ("name", "params"),
+    [
+        ("skate", {"t_end": 2.0}),
+        ("block-on-floor", {"tilt": 0.3, "drop": 0.1, "t_end": 0.6}),
+        ("four-bar-redundant", {"t_end": 0.5}),
+        ("gyrostat", {"t_end": 2.0}),
+    ],
+)
+def test_the_new_drawings_animate_with_one_frame_per_asked_frame(tmp_path: Path, name: str, params: dict) -> None:
+    scene = gp.scenes.get(name, **params)
+    out = tmp_path / f"{name}.gif"
+    gp.plot.animate(scene, _sim(scene), out=out, frames=9, fps=10, dpi=50)
+    assert _frames(out) == 9
+
+
+def test_runs_side_by_side_share_frames_limits_and_one_arrow_scale(tmp_path: Path) -> None:
+    runs = {}
+    for realization in ("ideal", "servo"):
+        scene = gp.scenes.get("two-masses", realization=realization, t_end=1.0)
+        runs[realization] = _sim(scene, samples=41 if realization == "ideal" else 57)  # different sample grids
+    anim = gp.plot.animate(scene, runs, frames=11, fps=10)
+    fig = anim._fig
+    assert len(fig.axes) == 2
+    assert fig.axes[0].get_xlim() == fig.axes[1].get_xlim()
+    titles = [ax.get_title() for ax in fig.axes]
+    assert titles[0].startswith("ideal: t = ") and titles[1].startswith("servo: t = ")
+    out = tmp_path / "pair.gif"
+    gp.plot.animate(scene, runs, frames=11, fps=10, dpi=50, out=out)
+    assert _frames(out) == 11
+
+
+def test_frames_are_spread_in_time_even_where_a_run_has_extra_samples() -> None:
+    from gausspp.plot.animation import frame_samples
+
+    t_events = np.sort(np.concatenate([np.linspace(0.0, 1.0, 101), 0.5 + 1e-4 * np.arange(1, 50)]))
+    (idx,) = frame_samples([t_events], 11, 10)
+    assert np.allclose(t_events[idx], np.linspace(0.0, 1.0, 11), atol=0.005)
+    assert len(set(idx.tolist())) == 11
+
+
+@given(
+    t=st.lists(st.floats(0.0, 10.0, allow_nan=False), min_size=1, max_size=40, unique=True).map(sorted),
+    grid=st.lists(st.floats(-1.0, 11.0, allow_nan=False), min_size=1, max_size=20),
+)
+@settings(max_examples=200, deadline=None)
+def test_nearest_sample_agrees_with_a_brute_force_search(t: list[float], grid: list[float]) -> None:
+    from gausspp.plot.animation import nearest
+
+    ts, gs = np.array(t), np.array(grid)
+    found = nearest(ts, gs)
+    best = np.abs(ts[None, :] - gs[:, None]).min(axis=1)
+    assert np.allclose(np.abs(ts[found] - gs), best, rtol=0.0, atol=1e-12 * (1.0 + np.abs(gs)))
+
+
+def test_body_axes_are_the_rotated_basis_seen_from_the_view() -> None:
+    from gausspp.scenes.rigid import VIEW_FROM, body_axes_drawing
+
+    back = np.array(VIEW_FROM) / np.linalg.norm(VIEW_FROM)
+    right = np.cross(-back, [0.0, 0.0, 1.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, -back)
+
+    def seen(p: np.ndarray) -> np.ndarray:
+        return np.array([right @ p, up @ p])
+
+    quarter_turn_z = np.array([np.cos(np.pi / 4), 0.0, 0.0, np.sin(np.pi / 4)])  # e₁ → y, e₂ → −x, e₃ → z
+    tips = [np.asarray(seg[1]) for seg in body_axes_drawing(quarter_turn_z)["axes"]]
+    expected = [seen(np.array(v, float)) for v in ((0, 1, 0), (-1, 0, 0), (0, 0, 1))]
+    for tip, want in zip(tips, expected, strict=True):
+        assert np.allclose(tip, want, atol=1e-12)
+    # a wrong turn (the inverse rotation) is told apart
+    inverse = [np.asarray(s[1]) for s in body_axes_drawing(quarter_turn_z * [1, -1, -1, -1])["axes"]]
+    assert not np.allclose(inverse[0], expected[0], atol=1e-3)
+
+
+def test_the_fast_gif_frames_match_full_renders_of_the_same_frames(tmp_path: Path) -> None:
+    scene = gp.scenes.get("four-bar-redundant", t_end=0.5)
+    traj = _sim(scene)
+    out = tmp_path / "fourbar.gif"
+    gp.plot.animate(scene, traj, out=out, frames=6, fps=10, dpi=60)
+    anim = gp.plot.animate(scene, traj, frames=6, fps=10)
+    fig = anim._fig
+    fig.set_dpi(60)
+    full = []
+    for k in range(6):
+        anim._func(k)
+        fig.canvas.draw()
+        full.append(np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(float))
+    with Image.open(out) as gif:
+        for k in (2, 5):
+            gif.seek(k)
+            frame = np.asarray(gif.convert("RGB"), float)
+            assert frame.shape == full[k].shape
+            same = np.abs(frame - full[k]).mean()
+            other = np.abs(frame - full[k - 2]).mean()  # a neighbouring frame: the mechanism has moved
+            assert same < 0.1 * other, (k, same, other)  # quantized to 64 colours: close, not equal

@@ -196,3 +196,17 @@ def test_readme_links_into_the_docs_inside_the_repository() -> None:
     assert "/work/" not in text
     missing = [t for t in targets if "://" not in t and not (ROOT / t.partition("#")[0]).exists()]
     assert not missing, f"README.md links to missing files: {missing}"
+
+
+@pytest.mark.parametrize("third_row", ["oblique", "distance"])
+def test_lecture_7_answers_the_motion_is_the_minimal_one_and_its_multipliers_are_no_longer(third_row: str) -> None:
+    redundant = gp.scenes.get("four-bar-redundant", third_row=third_row)
+    minimal = gp.scenes.get("four-bar-redundant", redundant=False)
+    step = redundant.model.step(0.0, redundant.q0, redundant.v0, solver="qp")
+    reference = minimal.model.step(0.0, minimal.q0, minimal.v0, solver="direct")
+    scale = np.linalg.norm(reference.a)
+    assert np.linalg.norm(step.a - reference.a) <= 1e-9 * scale  # exercise 1: the same acceleration
+    assert np.linalg.norm(step.u) <= np.linalg.norm(reference.u) * (1 + 1e-9)  # exercise 2: never longer
+    assert step.margin < 1e-8  # exercise 3: the rows are dependent
+    with pytest.raises(gp.RealizabilityError, match="not together"):
+        redundant.model.step(0.0, redundant.q0, redundant.v0, solver="direct")

@@ -8,6 +8,7 @@ default; the gallery's generated sources go to docs/auto_examples and docs/api, 
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -21,6 +22,17 @@ pytest.importorskip("pydata_sphinx_theme")
 pytest.importorskip("myst_parser")
 pytest.importorskip("sphinx_gallery")
 pytest.importorskip("matplotlib")
+Image = pytest.importorskip("PIL.Image")
+
+#: The examples whose gallery page plays an animation (issue 21: at least six).
+ANIMATED = (
+    "two_masses",
+    "nonholonomic_vs_vakonomic",
+    "crane_servo",
+    "bouncing_block",
+    "redundant_four_bar",
+    "one_constraint_three_realizations",
+)
 
 
 def test_site_builds_without_warnings(tmp_path: Path) -> None:
@@ -40,6 +52,14 @@ def test_site_builds_without_warnings(tmp_path: Path) -> None:
     assert set(examples) <= notebooks
     # the fast examples ran: their figures were captured from matplotlib
     assert (out / "_images" / "sphx_glr_two_masses_001.png").is_file()
+    # and the animated ones show their GIFs (written by plot.animate, several frames each) on their pages
+    for name in ANIMATED:
+        page = (out / "auto_examples" / f"{name}.html").read_text()
+        gifs = re.findall(r'src="(\.\./_images/sphx_glr_[^"]+\.gif)"', page)
+        assert gifs, f"{name}: no animation on its page"
+        with Image.open(out / "auto_examples" / gifs[0]) as gif:
+            assert gif.n_frames >= 30, name
+    assert len(ANIMATED) >= 6
 
 
 def test_api_reference_lists_every_public_name() -> None:

@@ -27,7 +27,7 @@ import warnings
 from typing import Any
 
 from .animation import animate
-from .base import pyplot
+from .base import palette, pyplot
 from .impacts import contacts
 from .integral import verification
 from .margin_map import realizability_map
@@ -48,6 +48,7 @@ __all__ = [
     "THREE_LABELS",
     "animate",
     "contacts",
+    "palette",
     "pyplot",
     "reaction_over_time",
     "realizability_map",

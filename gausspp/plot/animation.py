@@ -6,6 +6,7 @@ The drawing's keys are listed in :mod:`gausspp.plot.frames`. Several runs of one
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -14,7 +15,8 @@ import numpy as np
 
 from ..errors import GaussppError, InputError, ShapeError
 from .base import as_runs, pyplot
-from .frames import Panel, arrow_scale, arrows, limits, picture
+from .frames import Panel, arrow_scale, arrows, dense_way, limits, picture
+from .gif import save_gif
 
 
 def drawing_of(scene: Any) -> Any:
@@ -47,17 +49,20 @@ def _samples(label: str, traj: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def frame_samples(times: list[np.ndarray], frames: int | None, fps: int) -> list[np.ndarray]:
-    """The sample index of each frame in each run.
-
-    One run: :func:`frame_indices`. Several: frames evenly spread in time over the span every run covers,
-    each run's sample nearest to each frame's time.
-    """
-    if len(times) == 1:
-        return [frame_indices(len(times[0]), frames, fps)]
-    first = frame_indices(min(len(t) for t in times), frames, fps)
+    """The sample index of each frame in each run: frames evenly spread in time over the span every run
+    covers (as many as :func:`frame_indices` gives for the shortest run), each run's sample nearest to each
+    frame's time. (Spread in time, not in samples: a run with events has extra samples at its impacts.)"""
+    count = len(frame_indices(min(len(t) for t in times), frames, fps))
     start, stop = max(t[0] for t in times), min(t[-1] for t in times)
-    grid = np.linspace(start, stop, len(first))
-    return [np.abs(t[None, :] - grid[:, None]).argmin(axis=1) for t in times]
+    grid = np.linspace(start, stop, count)
+    return [nearest(t, grid) for t in times]
+
+
+def nearest(t: np.ndarray, grid: np.ndarray) -> np.ndarray:
+    """The index of the sample of ``t`` (increasing) nearest to each time of ``grid``."""
+    right = np.searchsorted(t, grid).clip(0, len(t) - 1)
+    left = (right - 1).clip(0)
+    return np.where(np.abs(grid - t[left]) <= np.abs(t[right] - grid), left, right)
 
 
 def animate(
@@ -130,25 +135,31 @@ def animate(
     box = limits([p for pics in pictures for p in pics])
     scale = arrow_scale(all_arrows, box[2])
     n = len(runs)
-    fig, axs = plt.subplots(1, n, figsize=(4.2 * n + 0.8, 4.0), layout="constrained", squeeze=False)
+    (lo, hi, _), width = box, max(4.2, 6.4 / n)
+    height = float(np.clip(width * (hi[1] - lo[1]) / (hi[0] - lo[0]) + 1.3, 2.6, 5.0))
+    fig, axs = plt.subplots(1, n, figsize=(width * n + 0.4, height), layout="constrained", squeeze=False)
     panels = [
-        Panel(ax, pics, arr, t[idx], box, scale, label)
-        for ax, pics, arr, (t, _), idx, label in zip(
+        Panel(ax, pics, arr, t[idx], box, scale, label, dense_way(draw, t, q, t[idx]))
+        for ax, pics, arr, (t, q), idx, label in zip(
             axs[0], pictures, all_arrows, samples.values(), chosen, runs, strict=True
         )
     ]
-    fig.suptitle(title if title is not None else str(getattr(scene, "name", "")))
-    for panel in panels:  # lay the figure out once, on the frame that is widest, then keep it fixed
+    heading = title if title is not None else str(getattr(scene, "name", ""))
+    fig.suptitle(textwrap.fill(heading, width=int(13 * (width * n + 0.4))), fontsize=11)
+    for panel in panels:  # lay the figure out on the last frame (its title is the widest), then keep it fixed
         panel.update(len(chosen[0]) - 1)
-    fig.canvas.draw()
-    fig.set_layout_engine("none")
 
     def update(k: int) -> list[Any]:
         return [artist for panel in panels for artist in panel.update(k)]
 
     anim = FuncAnimation(fig, update, frames=len(chosen[0]), interval=1000.0 / fps, blit=False)
-    if out is not None:
+    fig.canvas.draw()  # the layout, once; the animation counts as drawn (no warning if it is never saved)
+    fig.set_layout_engine("none")
+    if writer == "pillow" and out is not None:
+        save_gif(fig, update, len(chosen[0]), out, int(fps), dpi)
+    elif writer is not None:
         anim.save(str(out), writer=writer, fps=int(fps), dpi=dpi)
+    if out is not None:
         plt.close(fig)
     return anim
 

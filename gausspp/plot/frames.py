@@ -87,9 +87,13 @@ class Panel:
     """
 
     def __init__(self, ax: Any, pictures: list[dict[str, Any]], arrows_: list[list[Any]], times: np.ndarray,
-                 box: tuple[np.ndarray, np.ndarray, float], scale: float, label: str) -> None:  # fmt: skip
+                 box: tuple[np.ndarray, np.ndarray, float], scale: float, label: str,
+                 way: tuple[np.ndarray, np.ndarray] | None = None) -> None:  # fmt: skip
         self.ax, self.pictures, self.arrows, self.times = ax, pictures, arrows_, times
         self.scale, self.label = scale, label
+        #: the traced points at (a dense subset of) the run's samples, (M, n_trace, 2), and per frame how many
+        #: of them lie at or before the frame (the frame's own point is added last)
+        self.way = way
         lo, hi, _ = box
         first = pictures[0]
         xlabel, ylabel = first.get("labels", ("x (m)", "y (m)"))
@@ -125,16 +129,25 @@ class Panel:
             pts = points_of(pic, (key,))
             line.set_data(pts[:, 0], pts[:, 1])
         if self.traces:
-            way = np.stack([points_of(p, ("trace",)) for p in self.pictures[: k + 1]])  # (k+1, n_trace, 2)
+            way = self._way(k)
             for i, line in enumerate(self.traces):
                 line.set_data(way[:, i, 0], way[:, i, 1])
-        artists = [self.links, self.bodies, self.fixed, *self.body_axes, *self.traces]
+        artists = [self.links, self.bodies, self.fixed, *self.body_axes, *self.traces, self.ax.title]
         if self.scale > 0:
             self._draw_arrows(self.arrows[k])
             artists.append(self.quiver)
         prefix = f"{self.label}: " if self.label else ""
         self.ax.set_title(f"{prefix}t = {self.times[k]:.3f} s", fontsize=10)
         return artists
+
+    def _way(self, k: int) -> np.ndarray:
+        """The traced points' way up to frame ``k``, ``(K, n_trace, 2)``: the run's dense samples before the
+        frame, then the frame's own points (only the frames' points without a dense way)."""
+        now = points_of(self.pictures[k], ("trace",))[None]
+        if self.way is None:
+            return np.concatenate([np.stack([points_of(p, ("trace",)) for p in self.pictures[:k]] or [now[0]]), now])
+        dense, counts = self.way
+        return np.concatenate([dense[: counts[k]], now])
 
     def _draw_arrows(self, frame: list[tuple[np.ndarray, np.ndarray]]) -> None:
         """Replace the reaction arrows."""
@@ -153,3 +166,15 @@ def arrow_scale(all_arrows: list[list[list[Any]]], size: float) -> float:
     frame is :data:`ARROW` of the picture's ``size``; 0 when there is no arrow."""
     longest = max((float(np.linalg.norm(v)) for panel in all_arrows for f in panel for _, v in f), default=0.0)
     return longest / (ARROW * size) if longest > 0 else 0.0
+
+
+def dense_way(draw: Any, t: np.ndarray, q: np.ndarray, frame_times: np.ndarray, most: int = 2000) -> Any:
+    """The drawing's traced points at up to ``most`` evenly spread samples of a run, and for each frame time
+    how many of them come at or before it: ``(way (M, n_trace, 2), counts (frames,))``, or ``None`` when the
+    drawing traces nothing."""
+    if "trace" not in picture(draw, q[0]):
+        return None
+    keep = np.unique(np.linspace(0, len(t) - 1, min(len(t), most)).round().astype(int))
+    way = np.stack([points_of(picture(draw, q[i]), ("trace",)) for i in keep])
+    counts = np.searchsorted(t[keep], frame_times, side="right")
+    return way, counts

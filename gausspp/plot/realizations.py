@@ -146,7 +146,7 @@ def three_realizations(
     return fig
 
 
-def skate(*parameters: Any, runs: Mapping[str, Any] | None = None) -> Any:
+def skate(*parameters: Any, runs: Mapping[str, Any] | None = None, title: str | None = None) -> Any:
     """The nonholonomic and the vakonomic skate: one constraint, two laws of motion.
 
     Left: the contact point's paths ``(x(t), y(t))`` with the blade's heading ``θ`` drawn as
@@ -162,6 +162,8 @@ def skate(*parameters: Any, runs: Mapping[str, Any] | None = None) -> Any:
         not used (the runs carry them).
     runs : mapping
         The result of :func:`gausspp.studies.figures.skate_runs` (keys ``"nonholonomic"``, ``"vakonomic"``).
+    title : str, optional
+        The figure's title; the default states the constraint, not the parameters (the caller knows them).
 
     Returns
     -------
@@ -179,12 +181,12 @@ def skate(*parameters: Any, runs: Mapping[str, Any] | None = None) -> Any:
         ax.quiver(x[k], y[k], np.cos(th[k]), np.sin(th[k]), color=color, angles="xy", scale=22, width=0.004)
         axt.plot(tr.t, th, color=color, label=label)
     ax.plot(runs["nonholonomic"].q[0, 0], runs["nonholonomic"].q[0, 1], "ko", label="start")
-    ax.set(xlabel="x", ylabel="y", title="contact point in the plane (arrows: the blade's heading)")
+    ax.set(xlabel="x (m)", ylabel="y (m)", title="contact point in the plane (arrows: the blade's heading)")
     ax.set_aspect("equal", adjustable="datalim")
     ax.grid(True, alpha=0.3)
     ax.legend(fontsize=8)
-    axt.set(xlabel="time t", ylabel="heading θ [rad]", title="heading of the blade")
+    axt.set(xlabel="time t (s)", ylabel="heading θ (rad)", title="heading of the blade")
     axt.grid(True, alpha=0.3)
     axt.legend(fontsize=8)
-    fig.suptitle("Skate: no sideways slip (−sin θ ẋ + cos θ ẏ = 0), two laws of motion from the same start")
+    fig.suptitle(title or "Skate: no sideways slip (−sin θ ẋ + cos θ ẏ = 0), two laws of motion from the same start")
     return fig

@@ -109,7 +109,7 @@ def build(
 
 
 #: The blade's drawn length (m).
-BLADE = 0.3
+BLADE = 0.6
 
 
 def drawing(q: np.ndarray) -> dict[str, Any]:
@@ -118,5 +118,5 @@ def drawing(q: np.ndarray) -> dict[str, Any]:
     x, y, th = (float(c) for c in q[:3])
     half = 0.5 * BLADE * np.array([np.cos(th), np.sin(th)])
     point = np.array([x, y])
-    return {"segments": [(point - half, point + half)], "points": [point], "trace": [point],
+    return {"segments": [(point - half, point + half)], "trace": [point],
             "reaction": [(point, (0, 1))]}  # fmt: skip
