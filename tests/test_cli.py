@@ -132,6 +132,18 @@ def test_report_for_one_scene(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     assert (tmp_path / "work_precision.csv").stat().st_size > 0
 
 
+def test_report_figures_state_the_scene_parameters(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from gausspp.cli import commands
+
+    seen: dict = {}
+    monkeypatch.setattr(commands.plot, "save_work_precision", lambda rows, out, titles=None: seen.update(titles) or [])
+    assert cli.main(["report", "--scenes", "two-masses", "--repeats", "1", "--out", str(tmp_path)]) == 0
+    params = gp.scenes.get("two-masses").params
+    assert set(seen) == {"two-masses"}
+    assert "SI units" in seen["two-masses"]
+    assert f"m1 = {params['m1']:g}" in seen["two-masses"] and f"F = {params['F']:g}" in seen["two-masses"]
+
+
 def test_demo_by_the_real_entry_point(demo_run) -> None:
     assert demo_run.returncode == 0, demo_run.stderr
     assert "Every scene" in demo_run.stdout

@@ -73,8 +73,10 @@ def demo(args: argparse.Namespace) -> int:
 
 # -- report -------------------------------------------------------------------------------------------
 def _save_plots(rows: list[study.Row], out: Path) -> list[Path]:
+    known = set(scenes.names())
+    titles = {name: tables.scalar_parameters(scenes.get(name).params) for name in {r.scene for r in rows} & known}
     try:
-        return plot.save_work_precision(rows, out)
+        return plot.save_work_precision(rows, out, titles)
     except GaussppError as exc:  # matplotlib missing: the table and data are still written
         print(f"(no plots: {exc})")
         return []

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -59,13 +59,14 @@ def work_precision(rows: Sequence[Any], scene: str, ax: Any = None, *, title: st
     return fig
 
 
-def save_work_precision(rows: Sequence[Any], out: Path) -> list[Path]:
-    """One PNG per scene in ``out``."""
+def save_work_precision(rows: Sequence[Any], out: Path, titles: Mapping[str, str] | None = None) -> list[Path]:
+    """One PNG per scene in ``out``; ``titles`` maps a scene to its parameters for the title (see
+    :func:`work_precision`)."""
     plt = pyplot()
     out.mkdir(parents=True, exist_ok=True)
     paths = []
     for scene in dict.fromkeys(r.scene for r in rows):
-        fig = work_precision(rows, scene)
+        fig = work_precision(rows, scene, title=(titles or {}).get(scene))
         path = out / f"work_precision_{scene}.png"
         fig.savefig(path, dpi=110, bbox_inches="tight")
         plt.close(fig)

@@ -26,6 +26,13 @@ def label(name: str, params: dict[str, Any]) -> str:
     return name + (" (" + ", ".join(f"{k}={v!r}" for k, v in params.items()) + ")" if params else "")
 
 
+def scalar_parameters(params: dict[str, Any]) -> str:
+    """A scene's numeric parameters for a figure's title, in the scenes' SI units:
+    ``"m = 1, L = 1, g = 9.81, t_end = 1 (SI units)"`` (vectors, tensors and names left out)."""
+    numbers = {k: v for k, v in params.items() if isinstance(v, (int, float)) and not isinstance(v, bool)}
+    return ", ".join(f"{k} = {v:g}" for k, v in numbers.items()) + " (SI units)" if numbers else ""
+
+
 def realizations(model: Model) -> str:
     """How each constraint is realized, and each contact's restitution, on one line."""
     parts = [f"{n}: {c.realization.label}" for n, c in zip(model.names, model.constraints, strict=True)]
