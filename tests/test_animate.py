@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -193,3 +194,15 @@ def test_the_fast_gif_frames_match_full_renders_of_the_same_frames(tmp_path: Pat
             same = np.abs(frame - full[k]).mean()
             other = np.abs(frame - full[k - 2]).mean()  # a neighbouring frame: the mechanism has moved
             assert same < 0.1 * other, (k, same, other)  # quantized to 64 colours: close, not equal
+
+
+def test_the_scenes_the_readme_says_can_animate_have_drawings() -> None:
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    start = text.index("--animate out.gif` does the same")
+    sentence = text[start : text.index("\n\n", start)]
+    named = [name for name in re.findall(r"`([a-z0-9-]+)`", sentence) if name in gp.scenes.names()]
+    assert len(named) >= 7
+    for name in named:
+        assert gp.scenes.get(name).drawing is not None, name
+    for name in ("rigid-body-servo", "gyrostat", "gyrostat-extended"):  # "and the rigid bodies"
+        assert gp.scenes.get(name).drawing is not None, name
