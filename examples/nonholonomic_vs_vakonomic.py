@@ -16,7 +16,7 @@ import numpy as np
 
 import gausspp as gp
 from gausspp import plot
-from gausspp.studies.figures import skate_runs
+from gausspp.studies.figures import skate_runs, skate_title
 
 v0, omega0, lam0 = 1.0, 1.0, 0.5  # speed along the blade, turning rate, vakonomic λ(0)
 runs = skate_runs(v0=v0, omega0=omega0, lam0=lam0, t_end=10.0)
@@ -31,14 +31,7 @@ for law, traj in runs.items():
     )
 print("nonholonomic: a circle of radius v0/ω0 = 1; vakonomic: the heading oscillates and the skate drifts")
 
-fig = plot.skate(
-    runs=runs,
-    title=(
-        f"scene skate (knife edge): m = 1 kg, J = 0.1 kg·m², v0 = {v0:g} m/s, ω0 = {omega0:g} rad/s, θ0 = 0 rad, "
-        f"vakonomic λ(0) = {lam0:g} kg·m/s; t = 0 … 10 s\nno sideways slip −sin θ ẋ + cos θ ẏ = 0: "
-        "nonholonomic vs vakonomic"
-    ),
-)
+fig = plot.skate(runs=runs, title=skate_title(v0=v0, omega0=omega0, lam0=lam0, t_end=10.0))
 out = sys.argv[1] if len(sys.argv) > 1 else "nonholonomic_vs_vakonomic.png"
 fig.savefig(out, dpi=110, bbox_inches="tight")
 print(f"figure (paths in the plane, heading over time) written to {out}")

@@ -196,3 +196,14 @@ def test_example_figures_name_their_scene_and_units(
 ) -> None:
     fig = example_figure(script, monkeypatch, tmp_path, *args)
     assert_announces(fig, scene)
+
+
+def test_skate_figure_states_scene_parameters_and_units() -> None:
+    from gausspp.studies.figures import skate_runs, skate_title
+
+    params = dict(v0=0.7, omega0=1.3, lam0=0.2, t_end=1.0)
+    fig = gp.plot.skate(runs=skate_runs(samples=21, **params), title=skate_title(**params))
+    assert_announces(fig, "skate")
+    heading = titles(fig)
+    assert "v0 = 0.7 m/s" in heading and "ω0 = 1.3 rad/s" in heading and "λ(0) = 0.2 kg·m/s" in heading
+    assert "x (m)" in texts(fig) and "heading θ (rad)" in texts(fig)

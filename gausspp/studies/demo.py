@@ -23,7 +23,7 @@ from ..step import general as general_step
 from ..step.qp import qpsolvers_route
 from ..verification.crosscheck import crosscheck
 from ..verification.verify import verify
-from .figures import skate_runs, three_realizations_runs
+from .figures import skate_runs, skate_title, three_realizations_runs
 from .realizability_map import realizability_grid
 
 #: The one-step cases: the two masses with a rod and with a servo, the rigid body with Suslov's and a servo's axis.
@@ -301,7 +301,7 @@ def figure(out: Path, name: str) -> Path:
         "two_masses.png": two_masses_figure,
         "realizability_map.png": lambda: plot.realizability_map(realizability_grid()),
         "three_realizations.png": lambda: plot.three_realizations(runs=three_realizations_runs()),
-        "skate.png": lambda: plot.skate(runs=skate_runs()),
+        "skate.png": lambda: plot.skate(runs=skate_runs(), title=skate_title()),
     }[name]
     fig = draw()
     fig.savefig(out / name, dpi=100, bbox_inches="tight")

@@ -95,3 +95,22 @@ def skate_runs(
     times = np.linspace(0.0, float(t_end), int(samples))
     params = dict(m=m, J=J, v0=v0, omega0=omega0, theta0=theta0, lam0=lam0, t_end=t_end)
     return {law: tight_run(scenes.get("skate", realization=law, **params), times) for law in SKATE_LAWS}
+
+
+def skate_title(
+    m: float = 1.0,
+    J: float = 0.1,
+    v0: float = 1.0,
+    omega0: float = 1.0,
+    theta0: float = 0.0,
+    lam0: float = 0.5,
+    t_end: float = 10.0,
+) -> str:
+    """The skate figure's title: scene, parameters (with units) and the constraint, for :func:`skate_runs`'s
+    parameters (the same defaults). ``λ`` multiplies the constraint ``Φ`` (a velocity) in ``T* = T + λΦ``,
+    so it is a momentum (kg·m/s)."""
+    return (
+        f"scene skate (knife edge): m = {m:g} kg, J = {J:g} kg·m², v0 = {v0:g} m/s, ω0 = {omega0:g} rad/s, "
+        f"θ0 = {theta0:g} rad, vakonomic λ(0) = {lam0:g} kg·m/s; t = 0 … {t_end:g} s\n"
+        "no sideways slip −sin θ ẋ + cos θ ẏ = 0: nonholonomic vs vakonomic"
+    )
