@@ -181,3 +181,30 @@ def test_bad_input() -> None:
         gp.verify(gyro.model, motion(gyro, 0.5, 51), method="closed-form")
     with pytest.raises(gp.InputError, match="metric must be a symmetric positive definite"):
         gp.verify(scene.model, traj, metric=-np.eye(2))
+
+
+def _two_masses_path(F: float, realization: str) -> tuple[gp.scenes.Scene, gp.Trajectory]:
+    scene = gp.scenes.get("two-masses", F=F, v=0.5, k=0.0, realization=realization)
+    times = np.linspace(0.0, 1.0, 41)
+    return scene, gp.simulate(scene.model, scene.q0, scene.v0, 1.0, record=times, method="DOP853", rtol=1e-12)
+
+
+def test_a_path_with_no_reaction_is_a_motion_of_every_realization() -> None:
+    """Without forces the two masses glide together: R is round-off (1e-29) for the rod and the servo alike,
+    and the relative gap must not be round-off over round-off."""
+    rod, path = _two_masses_path(0.0, "ideal")
+    servo, _ = _two_masses_path(0.0, "servo")
+    assert np.abs(path.reaction).max() <= 1e-12
+    for model in (rod.model, servo.model):
+        assert gp.verify(model, path).is_motion
+
+
+@pytest.mark.parametrize("F", [1e-3, 1.0])
+def test_a_small_reaction_that_does_work_is_still_caught(F: float) -> None:
+    """Negative control of the round-off floor: with a force on m2 the rod's reaction works on the servo's
+    variations, and the rod's path is no motion of the servo model, even when the force is small."""
+    _, path = _two_masses_path(F, "ideal")
+    servo, _ = _two_masses_path(F, "servo")
+    result = gp.verify(servo.model, path)
+    assert not result.is_motion
+    assert result.relative_gap > 0.1  # a share of order one of the reaction does work, whatever the force's size

@@ -26,8 +26,8 @@ class Discretized:
 
     ``E1``/``E0`` are ``(N+1, k, n)``; rows with ``pointwise[r]`` true have ``E1 = 0`` and hold
     at each interior node, the others on each interval by the midpoint rule. ``f`` (optional)
-    is the known force ``F − h`` (plus any known reaction), the scale of a path with no relation
-    rows (see :func:`normalizer`).
+    is the known force ``F − h`` (plus any known reaction) and ``momentum`` (optional) is ``A v``:
+    the sizes ``R`` is measured against (see :func:`normalizer`).
     """
 
     t: np.ndarray
@@ -37,13 +37,15 @@ class Discretized:
     E0: np.ndarray
     pointwise: np.ndarray
     f: np.ndarray | None = None
+    momentum: np.ndarray | None = None
 
     def every_other(self) -> Discretized:
         idx = np.arange(0, self.t.size, 2)
         if idx[-1] != self.t.size - 1:
             idx = np.append(idx, self.t.size - 1)
         f = None if self.f is None else self.f[idx]
-        return Discretized(self.t[idx], self.R[idx], self.G[idx], self.E1[idx], self.E0[idx], self.pointwise, f)
+        p = None if self.momentum is None else self.momentum[idx]
+        return Discretized(self.t[idx], self.R[idx], self.G[idx], self.E1[idx], self.E0[idx], self.pointwise, f, p)
 
 
 # -- the discrete problem ---------------------------------------------------------------------
@@ -66,18 +68,44 @@ def value_at_zero(d: Discretized) -> float:
     return _mean_square(d.t, d.G, d.R)
 
 
+#: A reaction whose mean square is below this share of :func:`balance` is round-off: no reaction at all.
+NEGLIGIBLE = 1e-8
+
+
+def forces(d: Discretized) -> float:
+    """The size of the terms ``R = A ẍ − f`` balances, ``(1/T) ∫ (G⁻¹Aẍ, Aẍ) + (G⁻¹f, f) dt`` (0 when ``f`` is
+    unknown)."""
+    if d.f is None:
+        return 0.0
+    return _mean_square(d.t, d.G, d.R + d.f) + _mean_square(d.t, d.G, d.f)
+
+
+def balance(d: Discretized) -> float:
+    """:func:`forces` plus ``(1/T) ∫ (G⁻¹p, p) dt / T²``: the momentum ``p = A v`` over the horizon ``T`` is the
+    force scale of a motion without forces."""
+    size = forces(d)
+    if d.f is not None and d.momentum is not None:
+        size += _mean_square(d.t, d.G, d.momentum) / (d.t[-1] - d.t[0]) ** 2
+    return size
+
+
 def normalizer(d: Discretized) -> float:
-    """What the gap is measured against: ``value_at_zero``, or for a path with no relation rows the forces' size.
+    """What the gap is measured against: ``value_at_zero``, or for a path with no relation rows the forces' size;
+    never less than :data:`NEGLIGIBLE` times :func:`balance`.
 
     With relation rows the relative gap is the share of ``(G⁻¹R, R)`` that does work on admissible
     variations. Without any (a free piece: a body in flight between contacts, a saturated servo
     whose force is known) every variation is admissible, the gap is all of ``value_at_zero`` and
     the relative gap would be 1 for any path; there ``R = A ẍ − f`` must vanish, and the gap is
-    measured against ``(1/T) ∫ (G⁻¹Aẍ, Aẍ) + (G⁻¹f, f) dt``, the size of the terms it balances.
+    measured against :func:`forces`, the size of the terms it balances. A path whose reaction is
+    round-off (a free motion checked against any realization: ``R ≈ 1e-29``) would otherwise get a
+    relative gap of round-off over round-off, of order one; measured against :data:`NEGLIGIBLE` times the
+    balance, it is the motion it is.
     """
+    floor = NEGLIGIBLE * balance(d)
     if d.E0.shape[1] or d.f is None:
-        return value_at_zero(d)
-    return _mean_square(d.t, d.G, d.R + d.f) + _mean_square(d.t, d.G, d.f)
+        return max(value_at_zero(d), floor)
+    return max(forces(d), floor)
 
 
 def solve_qp(d: Discretized) -> tuple[float, np.ndarray, np.ndarray]:

@@ -203,6 +203,7 @@ def evaluate(
         E0=E0.reshape(r, N1, n).transpose(1, 0, 2),
         pointwise=fn.pointwise,  # type: ignore[attr-defined]
         f=f.reshape(n, N1).T,
+        momentum=np.einsum("nij,nj->ni", A, vn),
     )
 
 
