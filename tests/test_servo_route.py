@@ -100,6 +100,11 @@ def test_the_one_step_refusal_points_to_the_servo_route() -> None:
         assert "choose force directions" not in message  # not the advice to change the actuators
     traj = gp.simulate(scene.model, scene.q0, scene.v0, 1.0, throw=False)
     assert traj.status == "failed" and "gp.simulate_servo" in traj.message
+    # the failure itself travels with the trajectory: the reworded error, with its time and constraint
+    assert isinstance(traj.failure, gp.RealizabilityError) and "gp.simulate_servo" in str(traj.failure)
+    assert traj.failure.t == 0.0 and traj.failure.constraint
+    pendulum = gp.scenes.get("pendulum", t_end=0.1)
+    assert gp.simulate(pendulum.model, pendulum.q0, pendulum.v0, 0.1).failure is None
 
 
 def test_an_actuator_that_never_reaches_keeps_the_old_advice() -> None:

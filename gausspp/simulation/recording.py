@@ -223,4 +223,4 @@ def failed(traj: Trajectory, failure: Exception) -> Trajectory:
                 f" [smallest realizability margin on the way: {traj.margin[i]:.3g} at t={traj.t[i]:.6g} — the "
                 "realization may have lost the constraint there]"
             )
-    return replace(traj, status="failed", message=message)
+    return replace(traj, status="failed", message=message, failure=failure)

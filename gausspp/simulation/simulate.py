@@ -151,11 +151,11 @@ def _servo_advice(model: Model, t0: float, y0: np.ndarray, run: Callable[[], Tra
             raise
         better.trajectory = getattr(exc, "trajectory", None)  # type: ignore[attr-defined]
         raise better from None
-    if traj.status == "failed" and traj.t.size <= 1 and "not realizable" in traj.message:
-        better = servo_reach.explain(
-            model, RealizabilityError(traj.message, t=t0, constraint="", margin=0.0), t0, q0, v0
-        )
-        traj = replace(traj, message=str(better))
+    failure = traj.failure
+    if isinstance(failure, RealizabilityError) and failure.t == t0 and traj.t.size <= 1:
+        better = servo_reach.explain(model, failure, t0, q0, v0)
+        if better is not failure:
+            traj = recording.failed(traj, better)
     return traj
 
 

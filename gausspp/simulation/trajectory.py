@@ -46,6 +46,10 @@ class Trajectory:
     status : {"success", "failed"}
     message : str
         Why a run failed (empty on success).
+    failure : GaussppError or None
+        The error that stopped a failed run, with its details (for a
+        :class:`~gausspp.RealizabilityError`: ``t``, ``constraint``, ``margin``); ``None`` on success. Not
+        saved by :meth:`save` (its ``message`` is).
     method, solver : str
     lane : str
         The lane that ran the method (:mod:`gausspp.simulation.lanes`): ``"compiled"`` (the whole run as
@@ -100,6 +104,7 @@ class Trajectory:
     lane: str = ""
     route: str = ""
     labels: Labels = field(default_factory=Labels)
+    failure: Exception | None = field(default=None, compare=False, repr=False)
 
     @property
     def success(self) -> bool:
