@@ -275,3 +275,18 @@ def test_without_sympy_the_extra_is_named(monkeypatch):
     monkeypatch.setitem(sys.modules, "sympy.physics.mechanics", None)
     with pytest.raises(gp.GaussppError, match=r"pip install 'gausspp\[sympy\]'"):
         gp.from_sympy(object())
+
+
+def test_a_sympy_without_the_attributes_gausspp_reads_is_named() -> None:
+    """KanesMethod has no public accessor for its inertial frame and constraints as given; if a sympy release
+    drops them, the error says which and what to use instead."""
+    q, u = me.dynamicsymbols("q u")
+    N = me.ReferenceFrame("N")
+    P = me.Point("P")
+    P.set_vel(N, u * N.x)
+    kane = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff(T) - u])
+    kane.kanes_equations([me.Particle("p", P, 1)], [(P, -N.x)])
+    assert gp.from_sympy(kane, parameters={}).speeds == ("u",)
+    del kane._f_h
+    with pytest.raises(gp.InputError, match=r"configuration constraints.*_f_h.*System"):
+        gp.from_sympy(kane, parameters={})

@@ -145,20 +145,42 @@ def _free_equations(frame: Any, q: list[Any], u: list[Any], kdes: list[Any], bod
     return free
 
 
+def _time(me: Any) -> Any:
+    """sympy's time symbol: the argument of every dynamic symbol (``dynamicsymbols('x') = x(t)``)."""
+    return me.dynamicsymbols("x").args[0]
+
+
+def _unexposed(obj: Any, name: str, what: str) -> Any:
+    """An attribute sympy keeps but does not expose publicly (``what`` it holds), or a clear error if a sympy
+    release no longer has it."""
+    import sympy
+
+    if not hasattr(obj, name):
+        raise InputError(
+            f"from_sympy: sympy {sympy.__version__}'s {type(obj).__name__} no longer holds {what} where gausspp "
+            f"reads it ({name}); build the model with sympy.physics.mechanics.System instead, or pin sympy 1.14"
+        )
+    return getattr(obj, name)
+
+
 def _kane_parts(kane: Any, me: Any) -> _Parts:
-    t = me.dynamicsymbols._t
+    t = _time(me)
     q, u = list(kane.q), list(kane.u)
     kd = kane.kindiffdict()
     kdes = [qi.diff(t) - kd[qi.diff(t)] for qi in q]
-    free = _free_equations(kane._inertial, q, u, kdes, kane.bodies or [], kane.loads or [], me)
-    holonomic = list(kane._f_h)
-    k_nh = getattr(kane, "_k_nh", None)
-    velocity = list(k_nh * type(k_nh)(u) + kane._f_nh) if k_nh is not None and k_nh.rows else []
+    frame = _unexposed(kane, "_inertial", "the inertial frame")  # KanesMethod has no public accessor for it
+    free = _free_equations(frame, q, u, kdes, kane.bodies or [], kane.loads or [], me)
+    # the constraints as given: KanesMethod exposes them only through to_linearizer(), which refuses forcing
+    # terms with derivatives of specified quantities; f_v = k_nh u + f_nh
+    holonomic = list(_unexposed(kane, "_f_h", "the configuration constraints"))
+    k_nh = _unexposed(kane, "_k_nh", "the velocity constraints' matrix")
+    f_nh = _unexposed(kane, "_f_nh", "the velocity constraints' remainder")
+    velocity = list(k_nh * type(k_nh)(u) + f_nh) if k_nh is not None and k_nh.rows else []
     return _kane_like(free, q, u, holonomic, velocity, t)
 
 
 def _system_parts(system: Any, me: Any) -> _Parts:
-    t = me.dynamicsymbols._t
+    t = _time(me)
     q, u = list(system.q), list(system.u)
     loads = list(system.loads) + [load for actuator in system.actuators for load in actuator.to_loads()]
     free = _free_equations(system.frame, q, u, list(system.kdes), system.bodies, loads, me)
@@ -175,13 +197,14 @@ def _kane_like(free: Any, q: list[Any], u: list[Any], holonomic: list[Any], velo
 
 
 def _lagrange_parts(method: Any, me: Any) -> _Parts:
-    t = me.dynamicsymbols._t
+    t = _time(me)
     if method.eom is None:
         method.form_lagranges_equations()
     q = list(method.q)
     n = len(q)
     qd = [qi.diff(t) for qi in q]
-    holonomic = list(method._hol_coneqs)
+    # LagrangesMethod keeps the configuration constraints as given only here (its public coneqs are differentiated)
+    holonomic = list(_unexposed(method, "_hol_coneqs", "the configuration constraints"))
     velocity = list(method.coneqs[len(holonomic) :])  # the rows after the differentiated holonomic ones
     names = [f"{getattr(qi, 'func', qi)}'" for qi in q]
     leaves = {d: i for i, d in enumerate(qd)}
@@ -191,7 +214,7 @@ def _lagrange_parts(method: Any, me: Any) -> _Parts:
 def _leaves(parts: _Parts, values: dict[Any, float], q: Any, v: Any, t: Any, me: Any) -> dict[Any, Any]:
     """sympy leaf → casadi: the coordinates, the speeds (when ``v`` is given), the time and the parameters."""
     leaves: dict[Any, Any] = dict(values)
-    leaves[me.dynamicsymbols._t] = t
+    leaves[_time(me)] = t
     leaves.update({qi: q[i] for i, qi in enumerate(parts.q)})
     if v is not None:
         leaves.update({ui: v[i] for i, ui in enumerate(parts.u)})
