@@ -31,10 +31,13 @@ def both(model, samples, solver):
     return at_once, one_by_one
 
 
-@pytest.mark.parametrize("scene", ["pendulum", "gyrostat"])
+SCENES = {"pendulum": {}, "gyrostat": {}, "planar-chain": {"N": 16}}  # the chain: sparse route, banded margins
+
+
+@pytest.mark.parametrize("scene", sorted(SCENES))
 @pytest.mark.parametrize("solver", ["direct", "qp"])
 def test_at_once_equals_sample_by_sample(scene, solver):
-    sc = gp.scenes.get(scene)
+    sc = gp.scenes.get(scene, **SCENES[scene])
     traj = gp.simulate(sc.model, sc.q0, sc.v0, 0.5, dt=1e-3, method="rk4-compiled", solver=solver, record=5)
     assert traj.status == "success" and traj.t.size > 50
     (fast, fast_failure, notes), (slow, slow_failure, slow_notes) = both(sc.model, samples_of(sc.model, traj), solver)
@@ -79,3 +82,61 @@ def test_a_compiled_qp_run_is_recorded_by_replaying_its_own_qp_solutions(scene):
         np.testing.assert_allclose(replayed[name], solved[name], rtol=1e-12, atol=1e-13, err_msg=name)
     wrong, _, _ = rhs.evaluate_all(t, y, solutions * (1 + 1e-6))
     assert not np.allclose(wrong["a"], solved["a"], rtol=1e-12, atol=1e-13)
+
+
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+def test_the_mapped_step_stores_s_by_its_nonzeros_in_the_right_places(solver):
+    """The recording's mapped step keeps the normalized S by its nonzeros and scatters them into each sample's
+    matrix; that matrix is the single step's (dense) S at the same state, sample by sample."""
+    sc = gp.scenes.get("planar-chain", N=16)
+    assert sc.model.route == "sparse"
+    traj = gp.simulate(sc.model, sc.q0, sc.v0, 0.05, dt=1e-3, method="rk4", solver=solver, record=5)
+    rhs = RightHandSide(sc.model, solver, None, Stabilization())
+    y = samples_of(sc.model, traj).y
+    out, _, good = rhs.evaluate_all(traj.t, y)
+    assert good == traj.t.size and np.count_nonzero(out["S_norm"][0]) < out["S_norm"][0].size / 4  # banded
+    single = np.array([np.array(rhs.evaluate(t, yi)["S_norm"]).reshape(out["S_norm"].shape[1:]) for t, yi in
+                       zip(traj.t, y, strict=True)])  # fmt: skip
+    np.testing.assert_allclose(out["S_norm"], single, rtol=0.0, atol=1e-13)
+    swapped = out["S_norm"][::-1]  # negative control: another sample's S is told apart
+    assert np.abs(swapped - single).max() > 1e-6
+
+
+def test_a_symmetric_s_is_known_from_the_expressions():
+    from gausspp.step.realizability import stacked_margins
+
+    for name, params, symmetric in (
+        ("planar-chain", {"N": 3}, True),
+        ("pendulum", {}, True),
+        ("two-masses", {"realization": "ideal"}, True),
+        ("two-masses", {"realization": "servo"}, False),
+        ("gyrostat", {}, False),
+    ):
+        assert gp.scenes.get(name, **params).model.symmetric_S is symmetric, (name, params)
+    rng = np.random.default_rng(3)
+    B = rng.normal(size=(6, 4, 4))
+    S = B @ B.transpose(0, 2, 1)  # symmetric: the eigenvalue route gives the SVD's smallest singular value
+    np.testing.assert_allclose(stacked_margins(S, 4, 4, symmetric=True), np.linalg.svd(S)[1][:, -1], rtol=1e-10)
+    assert not np.allclose(stacked_margins(B, 4, 4, symmetric=True), np.linalg.svd(B)[1][:, -1], rtol=1e-3)
+
+
+def test_the_places_of_stored_entries_follow_casadis_column_major_order():
+    """_places maps a mapped output's nonzeros to (sample, row, column), for a pattern that is not symmetric."""
+    import casadi as ca
+
+    from gausspp.simulation.rhs import CHUNK, _places
+
+    rng = np.random.default_rng(5)
+    blocks = []
+    for _ in range(CHUNK):
+        block = np.zeros((3, 4))
+        block[0, 1], block[2, 0], block[1, 3], block[2, 3] = rng.normal(size=4) + 5.0  # nonzero, not symmetric
+        blocks.append(block)
+    stacked = ca.sparsify(ca.DM(np.hstack(blocks)))  # the samples' blocks side by side, as a mapped output
+    sample, row, col = _places(stacked.sparsity())
+    rebuilt = np.zeros((CHUNK, 3, 4))
+    rebuilt[sample, row, col] = np.asarray(stacked.nonzeros())
+    np.testing.assert_array_equal(rebuilt, np.array(blocks))
+    rebuilt_wrong = np.zeros((CHUNK, 3, 4))
+    rebuilt_wrong[sample, row[::-1], col] = np.asarray(stacked.nonzeros())[: row.size]  # negative control
+    assert not np.array_equal(rebuilt_wrong, np.array(blocks))

@@ -31,6 +31,7 @@ from ..step.general import GaussSolution
 from ..step.kernel import Kernel
 from ..step.problem import StepProblem
 from ..step.qp import QPBackend
+from ..step.realizability import symmetric_by_construction
 from ..step.results import ImpactResult, StepResult
 from ..step.sparse import choose_route
 from ..validation import positive
@@ -127,6 +128,8 @@ class Model:
         #: the route asked for ("auto", "dense" or "sparse") and the one taken ("dense" or "sparse")
         self.route_requested = route
         self.route = choose_route(a.expressions, route)
+        #: every reaction along its constraint's normal (D = Jᵀ): the normalized S is symmetric at every state
+        self.symmetric_S = self.k == self.m and symmetric_by_construction(a.expressions.J, a.expressions.D)
         self.codegen = bool(codegen)
         self.row_names, self.lam_columns, self.groups, self.group_bounds = (
             a.row_names,

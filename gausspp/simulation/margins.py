@@ -43,7 +43,7 @@ def audit(
     n, notes = t.size, list[str]()
     if not rhs.margin_checked:  # redundant rows: the margin is 0 by design and says nothing
         return n, failure, notes
-    if replaceable(failure) and n > 1 and model.m == model.k and not is_symmetric(S):
+    if replaceable(failure) and n > 1 and model.m == model.k and not (model.symmetric_S or is_symmetric(S)):
         # (a symmetric S is J A⁻¹ Jᵀ: positive semidefinite, det S ≥ 0 — a lost margin shows as a dip to zero)
         found = _sign_change(model, t, S)
         if found is not None:

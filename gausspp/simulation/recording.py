@@ -44,7 +44,8 @@ class Columns:
         self.model, self.general, self.kept = model, general, 0
         self.a, self.u, self.reaction = np.zeros((n, nv)), np.zeros((n, m)), np.zeros((n, nv))
         self.compulsion, self.energy = np.zeros(n), np.full(n, np.nan)
-        self.residual, self.g, self.S = np.zeros((n, k)), np.zeros((n, k)), np.zeros((n, k, m))
+        self.residual, self.g = np.zeros((n, k)), np.zeros((n, k))
+        self.S = np.zeros((n, k, m))
         self.contact_force = np.zeros((n, len(model.contact_row_names)))
         self.tracking_error, self.saturated = np.zeros(n), np.zeros((n, m), bool)
 
@@ -79,7 +80,9 @@ class Columns:
             self.contact_force[rows, list(active)] = u[:, m:]
         self.compulsion[rows] = flat("compulsion")[:, 0]
         self.residual[rows], self.g[rows] = flat("Phi")[:, :k], flat("g")[:, :k]
-        if k:
+        if k and start == 0 and n == self.S.shape[0] and out["S_norm"].shape[1:] == (k, m):
+            self.S = out["S_norm"]  # every sample at once (the smooth runs): taken as it is, not copied
+        elif k:
             self.S[rows] = out["S_norm"][:, :k, :m]
         if model.has_energy:
             self.energy[rows] = flat("energy")[:, 0]
@@ -91,7 +94,8 @@ class Columns:
     def margin(self, known: np.ndarray | None = None) -> np.ndarray:
         """The margin ``σ_min`` of each kept sample's normalized ``S``; the first ones may be ``known`` already."""
         known = np.zeros(0) if known is None else known
-        rest = stacked_margins(self.S[known.size : self.kept], self.model.k, self.model.m)
+        model = self.model
+        rest = stacked_margins(self.S[known.size : self.kept], model.k, model.m, symmetric=model.symmetric_S or None)
         return np.concatenate([known, rest])
 
 

@@ -6,12 +6,15 @@ the full diagnosis of :mod:`gausspp.step.outcome` only when something is wrong.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..disk_cache import cached_function
 from ..errors import NonFiniteError
 from ..model.model import Model
 from ..step import qp
+from ..step.bound import sparse_output
 from ..step.expressions import OUTPUTS
 from ..step.general import check_backend
 from ..step.kernel import Bound, CompiledKernel
@@ -111,7 +114,7 @@ class RightHandSide(_StateDerivative):
             out, n = _replayed(self.model, kernel, t, y, self._slices, solutions, replay)  # type: ignore[arg-type]
         self.evaluations += n
         m = self.model
-        margin = stacked_margins(out["S_norm"][:n], m.k, m.m)
+        margin = stacked_margins(out["S_norm"][:n], m.k, m.m, symmetric=m.symmetric_S or None)
         ok = (out["pivot"][:n, 0, 0] > 0) & np.isfinite(out["checksum"][:n, 0, 0])  # as evaluate, sample by sample
         ok &= (out["qp_primal"][:n, 0, 0] <= QP_TOLERANCE) & (margin >= m.margin_error)
         good = n if ok.all() else int(np.argmin(ok))
@@ -122,14 +125,20 @@ class RightHandSide(_StateDerivative):
 CHUNK = 128
 
 
+#: Where the normalized ``S`` is among the step's outputs: the recording's mapped steps store it by its nonzeros.
+S_OUTPUT = OUTPUTS.index("S_norm")
+
+
 def _mapped_step(model: Model, kernel: CompiledKernel, solver: str) -> Bound:
-    """The step mapped over :data:`CHUNK` samples (kept beside the kernel, and on disk for a direct step)."""
+    """The step mapped over :data:`CHUNK` samples (kept beside the kernel, and on disk for a direct step), its
+    ``S_norm`` stored by its nonzeros (:func:`~gausspp.step.bound.sparse_output`)."""
 
     def build() -> Bound:
         if kernel.qp_parts is not None:
             return Bound(kernel.function.map(CHUNK))
-        what = ("mapped step", CHUNK, solver, kernel.function.name(), kernel.function.n_instructions())
-        return Bound(cached_function(model, what, lambda: kernel.function.map(CHUNK)))
+        fn = kernel.function
+        what = ("mapped step", CHUNK, solver, fn.name(), fn.n_instructions(), "sparse S")
+        return Bound(cached_function(model, what, lambda: sparse_output(fn, S_OUTPUT).map(CHUNK)))
 
     return workspace(kernel).get(("mapped step", CHUNK), build)
 
@@ -146,7 +155,9 @@ def _replayed(
     """:func:`_mapped` with the samples where ``replay`` holds replayed from their QP ``solutions``."""
     assert kernel.qp_parts is not None
     parts = kernel.qp_parts
-    replayed = workspace(kernel).get(("replayed step", CHUNK), lambda: Bound(parts.replay().map(CHUNK)))
+    replayed = workspace(kernel).get(
+        ("replayed step", CHUNK), lambda: Bound(sparse_output(parts.replay(), S_OUTPUT).map(CHUNK))
+    )
     again = np.flatnonzero(~replay)
     out = _mapped(replayed, t[replay], y[replay], slices, solutions[replay])[0]  # SX: never refuses
     if again.size == 0:
@@ -169,7 +180,8 @@ def _mapped(
     how many were evaluated (fewer if casadi refused a chunk: the samples from it on are left out). ``extra``: one
     more input per sample (a row each)."""
     n = t.size
-    out = {name: np.empty((n, rows, cols // CHUNK)) for name, (rows, cols) in zip(OUTPUTS, mapped.shapes, strict=True)}
+    out = {name: np.zeros((n, rows, cols // CHUNK)) for name, (rows, cols) in zip(OUTPUTS, mapped.shapes, strict=True)}
+    places = [_places(mapped.fn.sparsity_out(i)) for i in range(len(OUTPUTS))]
     args, (sq, sv, sl) = mapped.args, slices  # the inputs column-major: sample after sample
     args[4][:] = 0.0
     for start in range(0, n, CHUNK):
@@ -186,9 +198,24 @@ def _mapped(
             mapped.eval()
         except RuntimeError:
             return out, start
-        for name, res, shape in zip(OUTPUTS, mapped.res, mapped.shapes, strict=True):
-            out[name][start:stop] = _stacked(res, shape, CHUNK)[: stop - start]
+        for name, res, shape, place in zip(OUTPUTS, mapped.res, mapped.shapes, places, strict=True):
+            if place is None:
+                out[name][start:stop] = _stacked(res, shape, CHUNK)[: stop - start]
+            else:  # stored by its nonzeros: each sample's into its (row, column)
+                sample, row, col = place
+                keep = sample < stop - start
+                out[name][start + sample[keep], row[keep], col[keep]] = res[keep]
     return out, n
+
+
+def _places(sparsity: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Where each stored entry of a mapped output goes: ``(sample, row, column)`` of its nonzeros (the samples'
+    blocks side by side, as :func:`_stacked`); ``None`` for a dense output."""
+    if sparsity.is_dense():
+        return None
+    rows, cols = (np.asarray(x, int) for x in sparsity.get_triplet())
+    width = sparsity.size2() // CHUNK
+    return cols // width, rows, cols % width
 
 
 def _stacked(res: np.ndarray, shape: tuple[int, int], n: int) -> np.ndarray:

@@ -109,19 +109,26 @@ def step_margin(S_norm: np.ndarray, k: int, m: int) -> float:
     return margin_of(singular_values(S_norm, k, m), k, m)
 
 
-def stacked_margins(S_norm: np.ndarray, k: int, m: int) -> np.ndarray:
+def symmetric_by_construction(J: ca.SX, D: ca.SX) -> bool:
+    """Whether every reaction acts along its own constraint's normal, ``D = Jᵀ`` as expressions (ideal rows, or
+    servo directions chosen along the normals): then the normalized ``S = J A⁻¹ Jᵀ`` is symmetric at every state."""
+    return bool(D.shape == J.T.shape and ca.is_equal(D, J.T, 1))
+
+
+def stacked_margins(S_norm: np.ndarray, k: int, m: int, symmetric: bool | None = None) -> np.ndarray:
     """:func:`step_margin` of each of ``n`` normalized ``S`` stacked as an ``(n, k, m)`` array, at once: the length
     of the row for ``k = 1``, the smallest singular value of a batched SVD otherwise (1 if ``k = 0``, 0 if
-    ``k > m``, NaN for a sample with NaN or inf in its ``S``)."""
+    ``k > m``, NaN for a sample with NaN or inf in its ``S``). ``symmetric``: whether each ``S`` is symmetric, if
+    the caller knows (:func:`symmetric_by_construction`); checked on the numbers otherwise."""
     n = S_norm.shape[0]
     if k == 0 or k > m or n == 0:
         return np.full(n, margin_of(np.zeros(0), k, m))
     if k == 1:
         return np.sqrt(np.einsum("ij,ij->i", S_norm[:, 0, :], S_norm[:, 0, :]))
     out = np.full(n, np.nan)  # NaN in, NaN out (as margin_of): the SVD is not even tried on those
-    finite = np.isfinite(S_norm).all(axis=(1, 2))
-    S = S_norm[finite]
-    if k == m and is_symmetric(S):
+    finite = np.isfinite(S_norm.sum(axis=(1, 2)))  # a NaN or an inf anywhere makes the sum so
+    S = S_norm if finite.all() else S_norm[finite]  # (no copy of a large stack when every sample is finite)
+    if k == m and (is_symmetric(S) if symmetric is None else symmetric):
         # symmetric (ideal constraints: S = J A⁻¹ Jᵀ, rows and columns normalized alike): the singular values
         # are the eigenvalues' magnitudes, and a symmetric eigensolver is several times faster than the SVD
         out[finite] = _symmetric_margins(S)
