@@ -23,7 +23,9 @@ from gausspp.step import checked
 from gausspp.step.realizability import graph_cosines
 
 FIELDS = ("a", "u", "reaction", "residual", "constraint_value", "free_acceleration", "cosines")
-SCENES = ("pendulum", "two-masses", "rigid-body-servo", "gyrostat", "skate", "andrews", "mixed-rate")
+SCENES = ("pendulum", "two-masses", "rigid-body-servo", "gyrostat", "skate", "andrews", "mixed-rate", "planar-chain")
+#: Parameters of the scenes above where the default does not exercise a route (the chain: sparse, banded S)
+PARAMS = {"planar-chain": {"N": 16}}
 
 
 def graph_values(S: np.ndarray) -> np.ndarray:
@@ -102,7 +104,7 @@ def full_route(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.
 @pytest.mark.parametrize("solver", ["direct", "qp"])
 @pytest.mark.parametrize("name", SCENES)
 def test_the_hot_path_answers_as_the_full_route(name: str, solver: str) -> None:
-    scene = gp.scenes.get(name)
+    scene = gp.scenes.get(name, **PARAMS.get(name, {}))
     model, q, v = scene.model, np.asarray(scene.q0, float), np.asarray(scene.v0, float)
     lam = scene.lam0 if getattr(scene, "lam0", None) is not None else None
     hot = checked.checked_call(model, solver, None, model.refine)

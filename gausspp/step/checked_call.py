@@ -38,11 +38,14 @@ from .results import StepResult
 PACKED = ("a", "u", "reaction", "compulsion", "residual", "Phi", "a_free", "qp_primal", "qp_dual")
 
 
-def _packing(fn: ca.Function, k: int, m: int, margin_warn: float, qp: bool) -> tuple[ca.Function, bool]:
-    """The SX function ``(t, q, v, λ, *OUTPUTS) ↦ [packed outputs, cosines or S_norm, flag]`` for the step
-    ``fn``'s outputs, and whether the cosines are in it."""
+def _packing(
+    fn: ca.Function, k: int, m: int, margin_warn: float, qp: bool, S_sparsity: ca.Sparsity
+) -> tuple[ca.Function, bool]:
+    """The SX function ``(t, q, v, λ, *OUTPUTS) ↦ [packed outputs, cosines or S_norm's nonzeros, flag]`` for the
+    step ``fn``'s outputs (``S_norm`` of the given sparsity), and whether the cosines are in it."""
     ins = [ca.SX.sym(name, fn.sparsity_in(i)) for i, name in enumerate(("t", "q", "v", "lam"))]
     out = {name: ca.SX.sym(name, fn.sparsity_out(i)) for i, name in enumerate(OUTPUTS)}
+    out["S_norm"] = ca.SX.sym("S_norm", S_sparsity)
     S = ca.reshape(out["S_norm"], k, m) if k else out["S_norm"]
     cos = graph_cosines(S, k, m)
     checks = [out["pivot"] > 0, ca.fabs(out["checksum"]) < ca.inf]
@@ -54,24 +57,34 @@ def _packing(fn: ca.Function, k: int, m: int, margin_warn: float, qp: bool) -> t
     flag = checks[0]
     for c in checks[1:]:
         flag = ca.logic_and(flag, c)
-    extra = cos if cos is not None else ca.vec(out["S_norm"])
+    extra = cos if cos is not None else out["S_norm"].nz[:]  # its nonzeros, column-major, as S_sparsity
     packed = ca.densify(ca.vertcat(*(ca.vec(out[name]) for name in PACKED), extra, flag))
     return ca.Function("checked_packing", [*ins, *out.values()], [packed]), cos is not None
 
 
-def _packed_function(kernel: CompiledKernel, k: int, m: int, margin_warn: float) -> tuple[ca.Function, bool]:
-    """``(t, q, v, λ) ↦ [packed outputs, cosines or S_norm, flag]`` and whether the cosines are in it: one
-    SX function for the direct step; for a QP, one MX graph level (the QP's parts, then the packing)."""
+#: Where ``S_norm`` is among the step's outputs.
+S_OUTPUT = OUTPUTS.index("S_norm")
+
+
+def _packed_function(
+    kernel: CompiledKernel, k: int, m: int, margin_warn: float
+) -> tuple[ca.Function, bool, ca.Sparsity]:
+    """``(t, q, v, λ) ↦ [packed outputs, cosines or S_norm's nonzeros, flag]``, whether the cosines are in it,
+    and the sparsity of the ``S_norm`` packed: one SX function for the direct step, its ``S_norm`` by its
+    nonzeros (a large banded ``S`` is a small part of its entries); for a QP, one MX graph level (the QP's
+    parts, then the packing), its ``S_norm`` dense."""
     fn, parts = kernel.function, kernel.qp_parts
-    packing, in_graph = _packing(fn, k, m, margin_warn, parts is not None)
     names = ("t", "q", "v", "lam")
     if parts is None:
         sx = [ca.SX.sym(name, fn.sparsity_in(i)) for i, name in enumerate(names)]
         out = fn.call([*sx, ca.SX.zeros(fn.sparsity_in(4))])  # no stabilization: the exact step
-        return ca.Function("checked_step", sx, packing.call([*sx, *out])), in_graph
+        out[S_OUTPUT] = ca.sparsify(out[S_OUTPUT])  # the entries that are the constant zero, dropped
+        packing, in_graph = _packing(fn, k, m, margin_warn, False, out[S_OUTPUT].sparsity())
+        return ca.Function("checked_step", sx, packing.call([*sx, *out])), in_graph, out[S_OUTPUT].sparsity()
+    packing, in_graph = _packing(fn, k, m, margin_warn, True, fn.sparsity_out(S_OUTPUT))
     mx = [ca.MX.sym(name, fn.sparsity_in(i)) for i, name in enumerate(names)]
     out_mx = parts.graph([*mx, ca.MX.zeros(fn.sparsity_in(4))])
-    return ca.Function("checked_step", mx, packing.call([*mx, *out_mx])), in_graph
+    return ca.Function("checked_step", mx, packing.call([*mx, *out_mx])), in_graph, fn.sparsity_out(S_OUTPUT)
 
 
 class CheckedCall:
@@ -95,7 +108,9 @@ class CheckedCall:
         self, kernel: CompiledKernel, k: int, m: int, lam0: np.ndarray | None, solver: str, margin_warn: float
     ) -> None:
         qp = kernel.qp_parts is not None
-        fn, self._cosines_in_graph = _packed_function(kernel, k, m, margin_warn)
+        fn, self._cosines_in_graph, S_sparsity = _packed_function(kernel, k, m, margin_warn)
+        #: where the packed nonzeros of S_norm go in the (k, m) matrix
+        self._S_places = tuple(np.asarray(x, int) for x in S_sparsity.get_triplet())
         self._bound = Bound(fn)
         self._t, self._q, self._v, self._lam = self._bound.args
         self._out = self._bound.res[0]
@@ -143,7 +158,9 @@ class CheckedCall:
         if self._cosines_in_graph:  # and the flag has checked the margin
             margin = out.item(-2)
         else:
-            cos = singular_values(cos, k, m) if k and k <= m else np.zeros(min(k, m))
+            S = np.zeros((k, m))
+            S[self._S_places] = cos
+            cos = singular_values(S, k, m) if k and k <= m else np.zeros(min(k, m))
             margin = margin_of(cos, k, m)
             if not margin >= self.margin_warn:
                 return None
