@@ -341,12 +341,19 @@ def figure(results: dict[str, dict[int, dict[str, Any]]], path: str, title: str)
     plt = headless_pyplot()
     if plt is None:
         return
+    from gausspp.plot import palette
+
     fig, ax = plt.subplots(figsize=(7, 5))
-    for label, route, key in SERIES:
+    for i, (label, route, key) in enumerate(SERIES):
         points = sorted((N, r[key]) for N, r in results.get(route, {}).items() if r["status"] == "ok" and key in r)
         if points and key != "first_s":
-            ax.loglog(*zip(*points, strict=True), "o-", label=label)
-    ax.set(xlabel="N links (levels of the ladder)", ylabel="µs per step", title=f"{title}, RK4, dt = {DT:g}")
+            style = "s--" if label.startswith("MuJoCo") else "o-"  # the peer dashed
+            ax.loglog(*zip(*points, strict=True), style, color=palette(i), label=label)
+    ax.set(
+        xlabel="N links (levels of the ladder)",
+        ylabel="wall time per step (µs)",
+        title=f"scene {title} (links m = 1 kg, L = 1 m): RK4, dt = {DT:g} s, {STEPS} steps",
+    )
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=8)
     fig.tight_layout()
