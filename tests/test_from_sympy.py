@@ -167,13 +167,19 @@ def test_a_realization_is_chosen_by_constraint_name():
 
 
 # -- (c) errors ------------------------------------------------------------------------------------
-def test_a_derivative_in_kanes_forcing_is_named():
-    q, u, F = me.dynamicsymbols("q u F")
+def _particle_on_a_line(force):
+    """Kane's equations of a unit particle on a line ``q`` (speed ``u``) pushed by ``force(t)``."""
+    q, u = me.dynamicsymbols("q u")
     N = me.ReferenceFrame("N")
     P = me.Point("P")
     P.set_vel(N, u * N.x)
     kane = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff(T) - u])
-    kane.kanes_equations([me.Particle("p", P, 1)], [(P, F.diff(T) * N.x)])
+    kane.kanes_equations([me.Particle("p", P, 1)], [(P, force * N.x)])
+    return kane
+
+
+def test_a_derivative_in_kanes_forcing_is_named():
+    kane = _particle_on_a_line(me.dynamicsymbols("F").diff(T))
     with pytest.raises(gp.InputError, match=r"Derivative\(F\(t\), t\)"):
         gp.from_sympy(kane, parameters={})
 
@@ -280,12 +286,7 @@ def test_without_sympy_the_extra_is_named(monkeypatch):
 def test_a_sympy_without_the_attributes_gausspp_reads_is_named() -> None:
     """KanesMethod has no public accessor for its inertial frame and constraints as given; if a sympy release
     drops them, the error says which and what to use instead."""
-    q, u = me.dynamicsymbols("q u")
-    N = me.ReferenceFrame("N")
-    P = me.Point("P")
-    P.set_vel(N, u * N.x)
-    kane = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff(T) - u])
-    kane.kanes_equations([me.Particle("p", P, 1)], [(P, -N.x)])
+    kane = _particle_on_a_line(-1)
     assert gp.from_sympy(kane, parameters={}).speeds == ("u",)
     del kane._f_h
     with pytest.raises(gp.InputError, match=r"configuration constraints.*_f_h.*System"):
