@@ -126,6 +126,32 @@ def animate(
         raise InputError(f"plot.animate: fps must be a positive integer, got {fps!r}")
     writer = _writer(out, writers)
     chosen = frame_samples([t for t, _ in samples.values()], frames, int(fps))
+    fig, panels = _panels(plt, draw, runs, samples, chosen)
+    heading = title if title is not None else str(getattr(scene, "name", ""))
+    fig.suptitle(textwrap.fill(heading, width=int(13 * fig.get_figwidth())), fontsize=11)
+    for panel in panels:  # lay the figure out on the last frame (its title is the widest), then keep it fixed
+        panel.update(len(chosen[0]) - 1)
+
+    def update(k: int) -> list[Any]:
+        return [artist for panel in panels for artist in panel.update(k)]
+
+    anim = FuncAnimation(fig, update, frames=len(chosen[0]), interval=1000.0 / fps, blit=False)
+    fig.canvas.draw()  # the layout, once; the animation counts as drawn (no warning if it is never saved)
+    fig.set_layout_engine("none")
+    if writer == "pillow" and out is not None:
+        save_gif(fig, update, len(chosen[0]), out, int(fps), dpi)
+    elif writer is not None:
+        anim.save(str(out), writer=writer, fps=int(fps), dpi=dpi)
+    if out is not None:
+        plt.close(fig)
+    return anim
+
+
+def _panels(
+    plt: Any, draw: Any, runs: dict[str, Any], samples: dict[str, tuple[np.ndarray, np.ndarray]], chosen: list[Any]
+) -> tuple[Any, list[Panel]]:
+    """The figure, one panel per run side by side: its pictures at the ``chosen`` samples, its reaction arrows
+    on one scale for all, the limits of every frame of every run, a size from the picture's aspect."""
     pictures = [[picture(draw, q[i]) for i in idx] for (_, q), idx in zip(samples.values(), chosen, strict=True)]
     all_arrows = [
         [arrows(p, None if getattr(run, "reaction", None) is None else np.asarray(run.reaction)[i])
@@ -144,24 +170,7 @@ def animate(
             axs[0], pictures, all_arrows, samples.values(), chosen, runs, strict=True
         )
     ]
-    heading = title if title is not None else str(getattr(scene, "name", ""))
-    fig.suptitle(textwrap.fill(heading, width=int(13 * (width * n + 0.4))), fontsize=11)
-    for panel in panels:  # lay the figure out on the last frame (its title is the widest), then keep it fixed
-        panel.update(len(chosen[0]) - 1)
-
-    def update(k: int) -> list[Any]:
-        return [artist for panel in panels for artist in panel.update(k)]
-
-    anim = FuncAnimation(fig, update, frames=len(chosen[0]), interval=1000.0 / fps, blit=False)
-    fig.canvas.draw()  # the layout, once; the animation counts as drawn (no warning if it is never saved)
-    fig.set_layout_engine("none")
-    if writer == "pillow" and out is not None:
-        save_gif(fig, update, len(chosen[0]), out, int(fps), dpi)
-    elif writer is not None:
-        anim.save(str(out), writer=writer, fps=int(fps), dpi=dpi)
-    if out is not None:
-        plt.close(fig)
-    return anim
+    return fig, panels
 
 
 def _writer(out: str | Path | None, writers: Any) -> str | None:
