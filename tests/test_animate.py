@@ -206,3 +206,20 @@ def test_the_scenes_the_readme_says_can_animate_have_drawings() -> None:
         assert gp.scenes.get(name).drawing is not None, name
     for name in ("rigid-body-servo", "gyrostat", "gyrostat-extended"):  # "and the rigid bodies"
         assert gp.scenes.get(name).drawing is not None, name
+
+
+def test_a_run_with_a_wrong_shape_or_a_nan_is_refused_clearly() -> None:
+    from types import SimpleNamespace
+
+    from gausspp.errors import ShapeError
+
+    scene = gp.scenes.get("pendulum", t_end=0.2)
+    traj = gp.simulate(scene.model, scene.q0, scene.v0, scene.t_end, record=np.linspace(0, 0.2, 11))
+    with pytest.raises(ShapeError, match=r"run 'bad' needs t \(N,\) and q \(N, nq\)"):
+        gp.plot.animate(scene, {"good": traj, "bad": SimpleNamespace(t=traj.t, q=traj.q[:-1])})
+    q = traj.q.copy()
+    q[:, :] = np.nan
+    with pytest.raises(ShapeError, match="no finite point"):
+        gp.plot.animate(scene, SimpleNamespace(t=traj.t, q=q))
+    with pytest.raises(InputError, match="empty"):
+        gp.plot.animate(scene, {})

@@ -218,8 +218,8 @@ def test_an_unsupported_function_is_refused_naming_it():
         to_casadi(sp.gamma(x) + x, {x: ca.SX.sym("x")})
 
 
-def test_a_system_gives_the_same_accelerations_as_its_lagrange_twin():
-    """The pinned pendulum as a ``System`` (sympy's public API only): same accelerations as the Lagrange import."""
+def _two_link_points():
+    """Two links ``L1``, ``L2`` pinned at ``O`` in the frame ``N``: their angles, speeds and end points."""
     q1, q2, u1, u2 = me.dynamicsymbols("q1 q2 u1 u2")
     N = me.ReferenceFrame("N")
     O = me.Point("O")
@@ -228,6 +228,12 @@ def test_a_system_gives_the_same_accelerations_as_its_lagrange_twin():
     P2 = P1.locatenew("P2", L2 * (sp.sin(q2) * N.x - sp.cos(q2) * N.y))
     P1.set_vel(N, P1.pos_from(O).dt(N).subs({q1.diff(T): u1}))
     P2.set_vel(N, P2.pos_from(O).dt(N).subs({q1.diff(T): u1, q2.diff(T): u2}))
+    return q1, q2, u1, u2, N, O, P1, P2
+
+
+def test_a_system_gives_the_same_accelerations_as_its_lagrange_twin():
+    """The pinned pendulum as a ``System`` (sympy's public API only): same accelerations as the Lagrange import."""
+    q1, q2, u1, u2, N, O, P1, P2 = _two_link_points()
     system = me.System(N, O)
     system.add_coordinates(q1, q2)
     system.add_speeds(u1, u2)
@@ -246,14 +252,7 @@ def test_a_system_gives_the_same_accelerations_as_its_lagrange_twin():
 
 def test_kanes_velocity_rows_that_differentiate_a_configuration_constraint_are_not_doubled():
     """Kane lists ġ = 0 among its velocity constraints: the import keeps it once, as ``Holonomic``."""
-    q1, q2, u1, u2 = me.dynamicsymbols("q1 q2 u1 u2")
-    N = me.ReferenceFrame("N")
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    P1 = O.locatenew("P1", L1 * (sp.sin(q1) * N.x - sp.cos(q1) * N.y))
-    P2 = P1.locatenew("P2", L2 * (sp.sin(q2) * N.x - sp.cos(q2) * N.y))
-    P1.set_vel(N, P1.pos_from(O).dt(N).subs({q1.diff(T): u1}))
-    P2.set_vel(N, P2.pos_from(O).dt(N).subs({q1.diff(T): u1, q2.diff(T): u2}))
+    q1, q2, u1, u2, N, O, P1, P2 = _two_link_points()
     tip = P2.pos_from(O).dot(N.y) + H
     kane = me.KanesMethod(
         N,

@@ -241,6 +241,13 @@ def test_ur5_tool_path_by_joint_torques_is_pinocchio_inverse_dynamics() -> None:
     q0 = np.array([0.1, -1.2, 1.5, -0.8, -1.4, 0.3])
     model = gp.Model(mech, tool_path(mech, "tool0", q0, np.array([0.08, 0.05, -0.04]), ca.DM.eye(6)))
     traj = gp.simulate(model, q0, np.zeros(6), 1.0, solver="qp", stabilize="baumgarte")
+    _torques_are_pinocchios(path, model, traj)
+    assert traj.labels.coordinate == mech.joint_names  # the URDF's joint names reach the results
+
+
+def _torques_are_pinocchios(path: str, model: gp.Model, traj: gp.Trajectory) -> None:
+    """The run kept its path, its joint torques are Pinocchio's inverse dynamics (RNEA) at every sample, and
+    (23) accepts it as a motion."""
     assert traj.status == "success"
     assert np.abs(traj.g).max() < 1e-8
     pm = pin.buildModelFromUrdf(path)
@@ -249,7 +256,6 @@ def test_ur5_tool_path_by_joint_torques_is_pinocchio_inverse_dynamics() -> None:
         expected = pin.rnea(pm, data, q, v, a)
         assert np.linalg.norm(tau - expected) <= 1e-9 * np.linalg.norm(expected)
     assert gp.verify(model, traj).is_motion
-    assert traj.labels.coordinate == mech.joint_names  # the URDF's joint names reach the results
 
 
 def _servo_check(path: str, coords: list[int], q0: np.ndarray, solver: str) -> None:
@@ -260,14 +266,7 @@ def _servo_check(path: str, coords: list[int], q0: np.ndarray, solver: str) -> N
     model = gp.Model(mech, tool_path(mech, "tip", q0, d, ca.DM.eye(n), coords))
     record = np.linspace(0.0, 1.0, 801)
     traj = gp.simulate(model, q0, np.zeros(n), 1.0, solver=solver, stabilize="baumgarte", record=record)
-    assert traj.status == "success"
-    assert np.abs(traj.g).max() < 1e-8
-    pm = pin.buildModelFromUrdf(path)
-    data = pm.createData()
-    for q, v, a, tau in zip(traj.q, traj.v, traj.a, traj.reaction, strict=True):
-        expected = pin.rnea(pm, data, q, v, a)
-        assert np.linalg.norm(tau - expected) <= 1e-9 * np.linalg.norm(expected)
-    assert gp.verify(model, traj).is_motion
+    _torques_are_pinocchios(path, model, traj)
     assert traj.labels.coordinate == mech.joint_names
 
 
