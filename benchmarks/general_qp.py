@@ -38,7 +38,7 @@ import qpsolvers
 from _timing import best_us
 
 import gausspp as gp
-import gausspp.step.general_step as _general_step
+import gausspp.step.general.general_step as _general_step
 from gausspp.scenes import crane, four_bar, saturated_crane
 from gausspp.scenes import two_actuator_servo as tas
 from gausspp.step.general import GaussProblem, solve_general

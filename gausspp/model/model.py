@@ -24,7 +24,8 @@ from ..errors import (
     RealizabilityError,
     ShapeError,
 )
-from ..step import checked, data, general_step, manifold, servo_reach
+from ..step import checked, data, servo_reach
+from ..step.general import general_step, manifold
 from ..step import impact as impact_step
 from ..step.data import NO_STAB, StepData
 from ..step.general import GaussSolution
@@ -313,7 +314,7 @@ class Model:
     def nearest_on_manifold(
         self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """The state on the constraints nearest ``(q, v)`` (:func:`gausspp.step.manifold.nearest_on_manifold`)."""
+        """The state on the constraints nearest ``(q, v)`` (:func:`gausspp.step.general.manifold.nearest_on_manifold`)."""
         return manifold.nearest_on_manifold(self, t, q, v, lam)
 
     def general_step_full(
@@ -328,7 +329,7 @@ class Model:
     ) -> tuple[StepResult, GaussSolution, dict[str, np.ndarray]]:
         """:meth:`general_step` on checked inputs, with what a simulation records.
 
-        See :func:`gausspp.step.general_step.solve_at`.
+        See :func:`gausspp.step.general.general_step.solve_at`.
         """
         return general_step.solve_at(self, t, q, v, lam, backend, stab, closed)
 

@@ -22,7 +22,7 @@ no answer (``S = J A⁻¹ Jᵀ`` is singular). ``third_row`` picks it:
   implied by the closure *on* the constraint manifold (dependent there only). Off it — e.g. at the
   stages of a Runge–Kutta step — the three rows are independent but nearly dependent and
   contradict each other by the drift; the step decides the redundancy at the nearest state on the
-  manifold (:mod:`gausspp.redundancy`) and returns the minimal model's acceleration.
+  manifold (:mod:`gausspp.step.general.redundancy`) and returns the minimal model's acceleration.
 
 Gauss's principle still fixes the acceleration uniquely; ``solver="qp"`` returns it with the
 least-norm multiplier (:mod:`gausspp.step.general`), ``solver="direct"`` refuses with a

@@ -3,7 +3,7 @@
 :func:`checked_step` is what :meth:`gausspp.Model.step` does. A compiled step is one casadi call
 (:func:`kernel_for`, kept in the model's workspace); its outputs are judged by
 :func:`~gausspp.step.outcome.to_result` (realizability margin, QP residuals). The general Gauss QP
-(:mod:`gausspp.step.general_step`) answers instead when the model has inequalities (contacts,
+(:mod:`gausspp.step.general.general_step`) answers instead when the model has inequalities (contacts,
 bounded actuators), and when the compiled QP meets rows that are redundant on the constraint manifold.
 """
 
@@ -18,7 +18,7 @@ from ..workspace import workspace
 from . import qp
 from .checked_call import CheckedCall
 from .data import NO_STAB, evaluate
-from .general_step import solve_at
+from .general.general_step import solve_at
 from .kernel import CompiledKernel, Kernel, build_kernel
 from .outcome import Where, evaluation_failed, to_result, warn_small_margin
 from .problem import StepProblem
@@ -130,7 +130,7 @@ def _small_margin(
 
     If they are dependent on the constraint manifold (and independent here only by round-off or drift),
     solving them exactly would amplify the drift by 1/margin — the general QP keeps the independent rows
-    instead (:mod:`gausspp.step.redundancy`); ``solver='direct'`` refuses.
+    instead (:mod:`gausspp.step.general.redundancy`); ``solver='direct'`` refuses.
     """
     if model.k > 1:
         try:

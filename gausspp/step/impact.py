@@ -13,7 +13,7 @@ import numpy as np
 from ..errors import InputError
 from .data import evaluate
 from .general import solve_general
-from .model_qp import closed_rows, gauss_problem
+from .general.model_qp import closed_rows, gauss_problem
 from .protocol import StepModel
 from .results import ImpactResult
 

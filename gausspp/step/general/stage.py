@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import QPSolveError
-from .qp import QP, QPAnswer, QPBackend, short_name
+from ...errors import QPSolveError
+from ..qp import QP, QPAnswer, QPBackend, short_name
 
 #: Relative violation of a stage's constraints above which the backend is deemed to have failed.
 FEASIBILITY_TOL = 1e-7

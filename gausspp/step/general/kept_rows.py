@@ -16,8 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import RealizabilityError
-from . import dense
+from ...errors import RealizabilityError
+from .. import dense
 from .gauss_problem import GaussProblem, at, row_kinds, row_names
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL, independent_rows
 from .scaling import Scaled, rank_of, scaled

@@ -14,14 +14,14 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..errors import RealizabilityError
-from ..workspace import workspace
-from . import dense
-from .bound import Bound, dense_outputs, load_inputs
-from .data import evaluate
-from .general import GaussProblem
+from ...errors import RealizabilityError
+from ...workspace import workspace
+from .. import dense
+from ..bound import Bound, dense_outputs, load_inputs
+from ..data import evaluate
+from .solve import GaussProblem
 from .model_qp import gauss_problem
-from .protocol import StepModel
+from ..protocol import StepModel
 from .redundancy import CLEARLY_INDEPENDENT, independent_rows
 
 #: Nearest state on the manifold: a row residual (as a coordinate distance) above this fraction of the state's

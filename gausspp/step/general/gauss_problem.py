@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..errors import NonFiniteError, ShapeError
+from ...errors import NonFiniteError, ShapeError
 
 
 @dataclass(frozen=True)

@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from ..workspace import workspace
-from .general import GaussProblem
-from .protocol import StepModel
+from ...workspace import workspace
+from .solve import GaussProblem
+from ..protocol import StepModel
 
 
 def closed_rows(model: StepModel, gc: np.ndarray, closed: Any) -> np.ndarray:

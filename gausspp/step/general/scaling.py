@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import NotPositiveDefiniteError, RealizabilityError
-from . import dense
+from ...errors import NotPositiveDefiniteError, RealizabilityError
+from .. import dense
 from .gauss_problem import GaussProblem, at, row_names
 
 #: Singular values below this fraction of the largest count as zero (rows are normalized first).
