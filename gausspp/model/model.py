@@ -25,10 +25,9 @@ from ..errors import (
     ShapeError,
 )
 from ..step import checked, data, servo_reach
-from ..step.general import general_step, manifold
 from ..step import impact as impact_step
 from ..step.data import NO_STAB, StepData
-from ..step.general import GaussSolution
+from ..step.general import GaussSolution, general_step, manifold
 from ..step.kernel import Kernel
 from ..step.problem import StepProblem
 from ..step.qp import QPBackend
@@ -314,7 +313,8 @@ class Model:
     def nearest_on_manifold(
         self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """The state on the constraints nearest ``(q, v)`` (:func:`gausspp.step.general.manifold.nearest_on_manifold`)."""
+        """The state on the constraints nearest ``(q, v)``
+        (:func:`gausspp.step.general.manifold.nearest_on_manifold`)."""
         return manifold.nearest_on_manifold(self, t, q, v, lam)
 
     def general_step_full(

@@ -15,12 +15,12 @@ import numpy as np
 from ...errors import InputError, NonFiniteError
 from .. import dense
 from ..data import NO_STAB, StepData, evaluate
-from .solve import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, solve_general
-from .manifold import on_manifold, reference_problem
-from .model_qp import closed_rows, gauss_problem
 from ..protocol import StepModel
 from ..realizability import normalized_cosines
 from ..results import StepResult
+from .manifold import on_manifold, reference_problem
+from .model_qp import closed_rows, gauss_problem
+from .solve import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, solve_general
 
 
 def _check_contacts(model: StepModel, t: float, d: StepData, closed: np.ndarray) -> None:

@@ -19,10 +19,10 @@ from ...workspace import workspace
 from .. import dense
 from ..bound import Bound, dense_outputs, load_inputs
 from ..data import evaluate
-from .solve import GaussProblem
-from .model_qp import gauss_problem
 from ..protocol import StepModel
+from .model_qp import gauss_problem
 from .redundancy import CLEARLY_INDEPENDENT, independent_rows
+from .solve import GaussProblem
 
 #: Nearest state on the manifold: a row residual (as a coordinate distance) above this fraction of the state's
 #: size means that the dependent rows cannot hold together — they contradict each other.

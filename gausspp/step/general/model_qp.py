@@ -13,8 +13,8 @@ from typing import Any
 import numpy as np
 
 from ...workspace import workspace
-from .solve import GaussProblem
 from ..protocol import StepModel
+from .solve import GaussProblem
 
 
 def closed_rows(model: StepModel, gc: np.ndarray, closed: Any) -> np.ndarray:

@@ -53,9 +53,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import dense, qp
+from ..qp import QP, QPBackend
 from .gauss_problem import GaussProblem, GaussSolution, at, row_kinds
 from .kept_rows import NearManifold, Reference, decide_rows
-from ..qp import QP, QPBackend
 from .redundancy import DEPENDENCE_TOL
 from .scaling import RANGE_TOL, RANK_TOL, Scaled, compress, range_basis, rank_of, scaled, svd_rank, truncated_pinv
 from .stage import DUAL_TOL, FEASIBILITY_TOL, solve_stage
