@@ -15,6 +15,13 @@ same :class:`~gausspp.step.general.GaussProblem`; ``vs daqp`` — the largest re
 acceleration and (where the unknowns are the same) the reaction from the general QP with daqp.
 Each time is the minimum over repeats of the mean per-call time (noise only adds time).
 
+MuJoCo peers (optional: the peers extra, ``pip install 'gausspp[peers]'``; one line says when mujoco is
+missing): the same four-bar (2 s), the block dropped on the floor (3 s) and a ladder of ``N`` parallelogram
+cells side by side (1 s, ``N`` = 4 … 64), as MJCF with hinges, slides and ``connect`` equalities
+(``benchmarks/_mujoco_peers.py``), RK4 at ``dt = 1e-3``: the whole run's wall, µs per step, the constraint
+violation at the end; the four-bar's crank angle beside gausspp's minimal model's. ``--peers-only`` prints
+only these rows.
+
 The general QP calls ``scipy.linalg.solve_triangular`` with several right-hand sides; with a
 multi-threaded OpenBLAS on a busy machine a single such call has been measured at up to 3 ms
 (15 µs single-threaded). Run with ``OPENBLAS_NUM_THREADS=1`` to see the code's own cost; the header
@@ -156,10 +163,80 @@ def print_table(rows: list[Row]) -> None:
         print(f"{case:<44} {r.route:<38} {times}  {r.note}")
 
 
+def mujoco_section(budget: float, repeats: int) -> None:
+    """The MuJoCo peer rows (``benchmarks/_mujoco_peers.py``), or one line saying the peers extra is missing."""
+    try:
+        import mujoco
+    except ImportError:
+        print("MuJoCo peer rows skipped: mujoco is not installed (the peers extra: pip install 'gausspp[peers]')")
+        return
+    import _mujoco_peers as mjp
+
+    print(
+        f"MuJoCo {mujoco.__version__} peers: RK4, dt = {mjp.DT:g}, whole runs in MuJoCo's loop (mj_step nstep); "
+        f"connect equalities at the stiffest softness ({mjp.stiffest()})"
+    )
+    header = f"{'case':<44} {'route':<38} {'wall ms':>9} {'µs/step':>9} {'violation':>9}  note"
+    print(header + "\n" + "-" * (len(header) + 30))
+
+    def line(case: str, route: str, wall_ms: float, step_us: float, violation: float, note: str = "") -> None:
+        times = f"{_num(wall_ms, '.2f')} {_num(step_us, '.2f')} {_num(violation, '.1e')}"
+        print(f"{case:<44} {route:<38} {times}  {note}".rstrip())
+
+    # -- four-bar, 2 s: MuJoCo's hinge chain closed by one connect, beside gausspp's minimal model ------
+    scene = four_bar.build(redundant=False)
+    p = scene.params
+    geometry = {k: p[k] for k in ("l0", "l1", "l2", "l3", "rho", "g", "theta0", "omega0")}
+    fb = mjp.four_bar(scene.t_end, budget=budget, repeats=repeats, **geometry)
+    steps = round(scene.t_end / mjp.DT)
+
+    def simulate() -> Any:
+        return gp.simulate(scene.model, scene.q0, scene.v0, scene.t_end, dt=mjp.DT, method="rk4-compiled")
+
+    ref = simulate().q[-1]
+    ref_us = best_us(simulate, budget, repeats)
+    phi = np.cumsum(ref)  # absolute angles
+    closure = p["l1"] * np.exp(1j * phi[0]) + p["l2"] * np.exp(1j * phi[1]) + p["l3"] * np.exp(1j * phi[2]) - p["l0"]
+    case = f"four-bar-redundant, {scene.t_end:g} s (θ1 = π/2, ω0 = {p['omega0']:g})"
+    note = f"θ1(T) = {fb['theta1']:.6f} rad, − gausspp: {fb['theta1'] - ref[0]:+.1e}; "
+    note += f"energy drift {fb['energy_drift']:.0e}"
+    line(case, "MuJoCo hinge chain + 1 connect", fb["wall_ms"], fb["step_us"], fb["violation"], note)
+    note = f"θ1(T) = {ref[0]:.6f} rad"
+    line("", "gausspp minimal: simulate rk4-compiled", ref_us / 1e3, ref_us / steps, abs(closure), note)
+
+    # -- block dropped on the floor, 3 s ------------------------------------------------------------------
+    bd = mjp.box_drop(budget=budget, repeats=repeats)
+    case = "block-on-floor, 3 s (drop 1 m, e = 0.5)"
+    note = (
+        f"restitution {bd['restitution']:.3f} (contact ζ {bd['damping_ratio']:.3f}), first impact "
+        f"{bd['first_impact']:.3f} s (exact {math.sqrt(2 / 9.81):.3f}); last 0.5 s: corner within "
+        f"{bd['rest_band']:.0e} m of the floor, |q̇| ≤ {bd['rest_speed']:.0e}, "
+        f"{bd['airborne']:.0%} of steps without contact"
+    )
+    line(case, "MuJoCo slide x, z + hinge y on a plane", bd["wall_ms"], bd["step_us"], bd["violation"], note)
+    line("", "MuJoCo: one mj_step resting", math.nan, bd["rest_step_us"], math.nan)
+
+    # -- ladder of N parallelogram cells, 1 s ---------------------------------------------------------------
+    sizes, per_step = (4, 8, 16, 32, 64), []
+    for n in sizes:
+        ld = mjp.parallelogram_ladder(n, budget=budget, repeats=repeats)
+        per_step.append(ld["step_us"])
+        case = "parallelogram ladder, 1 s (tips 1 m/s)" if n == sizes[0] else ""
+        route = f"MuJoCo N = {n}: {ld['nv']} hinges, {n} connects"
+        note = (
+            f"crank turned {ld['angle']:.4f} rad (− one-DOF model: {ld['angle_error']:+.0e}), spread {ld['spread']:.0e}"
+        )
+        line(case, route, ld["wall_ms"], ld["step_us"], ld["violation"], note)
+    fits = [mjp.growth_exponent(list(sizes[k:]), per_step[k:]) for k in (0, 2)]
+    print(f"\nMuJoCo ladder: µs/step ∝ N^{fits[0]:.2f} (least squares over N = {sizes[0]} … {sizes[-1]}; ", end="")
+    print(f"N^{fits[1]:.2f} over N = {sizes[2]} … {sizes[-1]})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="~0.02 s per repeat instead of ~0.1 s")
     parser.add_argument("--repeats", type=int, default=3, help="timing repeats; the minimum is reported")
+    parser.add_argument("--peers-only", action="store_true", help="only the MuJoCo peer rows")
     args = parser.parse_args()
     budget = 0.02 if args.quick else 0.1
     start = perf_counter()
@@ -169,6 +246,10 @@ def main() -> None:
         f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}"
     )
     print(f"timing: min of {args.repeats} repeats of ~{budget:g} s each\n")
+    if args.peers_only:
+        mujoco_section(budget, args.repeats)
+        print(f"(total {perf_counter() - start:.1f} s)")
+        return
     rows: list[Row] = []
 
     # -- crane: a state where the unbounded servo needs 12.51 N ------------------------------------
@@ -203,7 +284,8 @@ def main() -> None:
 
     print_table(rows)
     worst = max((r.disagreement for r in rows if r.route.endswith("osqp") and np.isfinite(r.disagreement)), default=0)
-    print(f"\nlargest daqp–OSQP disagreement on these steps: {worst:.1e}")
+    print(f"\nlargest daqp–OSQP disagreement on these steps: {worst:.1e}\n")
+    mujoco_section(budget, args.repeats)
     print(f"(total {perf_counter() - start:.1f} s)")
 
 

@@ -86,7 +86,7 @@ def test_contacts_that_cannot_all_hold_are_a_clear_qp_error(backend: str) -> Non
 
 def test_backend_names() -> None:
     """A name means one backend on every path (the registry's): no swap, a bare name by the registry's rule."""
-    assert check_backend(None) == default_backend() == "daqp"
+    assert check_backend(None) == default_backend() == "qrqp"  # casadi's, compiled into the general step
     assert check_backend("qpsolvers:osqp") == "osqp" and check_backend("casadi:osqp") == "casadi:osqp"
     # the compiled default is not swapped for another solver; its short name is the bare one (qpsolvers has no qrqp)
     assert check_backend("casadi:qrqp") == check_backend("qrqp") == "qrqp"
@@ -266,14 +266,16 @@ def test_an_uninstalled_backend_is_an_error_not_a_swap(monkeypatch: pytest.Monke
     from gausspp.step.qp import qpsolvers_route
 
     monkeypatch.setattr(qpsolvers_route, "available", lambda: ["osqp"])
-    monkeypatch.setattr(registry, "plugin_available", lambda plugin: plugin == "qrqp")
+    monkeypatch.setattr(registry, "plugin_available", lambda plugin: plugin == "proxqp")
     registry._make.cache_clear()
     try:
         with pytest.raises(BackendUnavailableError, match=r"'qpsolvers:daqp'.*no solver 'daqp' installed"):
             solve_general(_problem(), "qpsolvers:daqp")
         with pytest.raises(BackendUnavailableError, match=r"'casadi:osqp'.*cannot load the conic plugin 'osqp'"):
             _servo(bounds=(-9.5, 9.5)).step(0.0, [0, 0], [0, 1], backend="casadi:osqp")
-        assert check_backend(None) == "osqp"  # the general default: daqp not installed, so OSQP (declared order)
+        assert (
+            check_backend(None) == "osqp"
+        )  # the general default: neither qrqp nor daqp here, so OSQP (declared order)
     finally:
         registry._make.cache_clear()
 

@@ -96,7 +96,7 @@ def test_saturated_crane_scene_record() -> None:
 def test_saturated_crane_with_a_loose_bound_is_the_unbounded_servo(F_max: float, unbounded_crane) -> None:
     scene = saturated_crane.build(F_max=F_max)
     traj = run_crane(scene)
-    assert traj.success and traj.solver == "gauss-qp:daqp" and unbounded_crane.solver == "casadi:qrqp"
+    assert traj.success and traj.solver == "gauss-qp:qrqp" and unbounded_crane.solver == "casadi:qrqp"
     np.testing.assert_array_equal(traj.t, unbounded_crane.t)
     # measured: 2.3e-14 in q, 3.3e-13 in v, 3.4e-12 in u (|u| up to 16.7)
     np.testing.assert_allclose(traj.q, unbounded_crane.q, rtol=0, atol=1e-9)
@@ -475,7 +475,7 @@ def test_two_actuator_servo_bounded_run_keeps_the_altitude_and_turns() -> None:
     cap = 6.5
     scene = tas.build(f_max=(cap, np.inf), t_end=0.6)
     traj = gp.simulate(scene.model, scene.q0, scene.v0, scene.t_end, method="rk4", dt=0.01)
-    assert traj.success and traj.solver == "gauss-qp:daqp"
+    assert traj.success and traj.solver == "gauss-qp:qrqp"
     assert np.all(traj.tracking_error == 0.0)
     assert np.max(np.abs(traj.g)) < 1e-8 and np.max(np.abs(traj.residual)) < 1e-8  # RK4's drift: 1.4e-9
     assert np.all(traj.u >= 0.0) and np.max(traj.u[:, 0]) <= cap * (1 + 4 * EPS)
@@ -583,7 +583,7 @@ def test_four_bar_redundant_run_is_the_minimal_run() -> None:
     options = dict(method="rk4", dt=0.02, record=5)
     ref = gp.simulate(minimal.model, minimal.q0, minimal.v0, minimal.t_end, solver="direct", **options)
     traj = gp.simulate(redundant.model, redundant.q0, redundant.v0, redundant.t_end, solver="qp", **options)
-    assert traj.success and traj.solver == "gauss-qp:daqp" and len(traj) == 21
+    assert traj.success and traj.solver == "gauss-qp:qrqp" and len(traj) == 21
     np.testing.assert_allclose(traj.q, ref.q, rtol=0, atol=1e-9)
     np.testing.assert_allclose(traj.v, ref.v, rtol=0, atol=1e-9)
     assert np.ptp(traj.q[:, 0]) > 2 * np.pi  # the crank turns fully

@@ -249,6 +249,10 @@ class Model:
             result = fast(t, q, v, lam)
             if result is not None:
                 return result
+        else:  # contacts, bounds or redundant rows: the compiled general step, if its flag is up
+            result = checked.general_hot(self, t, q, v, lam, solver, backend)
+            if result is not None:
+                return result
         t, q, v, lam = self.checked_state(t, q, v, lam)
         try:
             return checked.checked_step(self, t, q, v, lam, solver, backend, refine)

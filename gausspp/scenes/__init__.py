@@ -36,6 +36,7 @@ _MODULES: dict[str, str] = {
     "four-bar-redundant": "four_bar",
     "planar-chain": "planar_chain",
     "planar-ladder": "planar_chain",
+    "parallelogram": "parallelogram",
     "overhead-crane": "overhead_crane",
     "spring-chain-servo": "spring_chain_servo",
     "ur5-tool-path": "ur5_tool_path",
@@ -44,7 +45,15 @@ _MODULES: dict[str, str] = {
 
 #: Scenes whose step is not a square equality system (contacts, bounded or extra actuators, redundant
 #: rows): only the general Gauss QP steps them, so studies that compare the direct formula skip them.
-GENERAL = ("block-on-floor", "bouncing-pendulum", "saturated-crane", "two-actuator-servo", "four-bar-redundant")
+#: The parallelogram's rows are redundant at every state with ``third_bar`` and at its collinear positions without.
+GENERAL = (
+    "block-on-floor",
+    "bouncing-pendulum",
+    "saturated-crane",
+    "two-actuator-servo",
+    "four-bar-redundant",
+    "parallelogram",
+)
 
 #: Servo scenes realized tangentially (issue 19): the one-step matrix ``J A⁻¹ Mᵀ`` is singular at every state
 #: (the actuators reach the constraint only in a higher derivative, index > 3), so no one-step route steps them:

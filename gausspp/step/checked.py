@@ -9,6 +9,8 @@ bounded actuators), and when the compiled QP meets rows that are redundant on th
 
 from __future__ import annotations
 
+from typing import Any
+
 import casadi as ca
 import numpy as np
 
@@ -18,6 +20,7 @@ from ..workspace import workspace
 from . import qp
 from .checked_call import CheckedCall
 from .data import NO_STAB, evaluate
+from .general import general_step
 from .general.general_step import solve_at
 from .kernel import CompiledKernel, Kernel, build_kernel
 from .outcome import Where, evaluation_failed, to_result, warn_small_margin
@@ -85,6 +88,37 @@ def checked_call(model: StepModel, solver: str, backend: object, refine: bool) -
     return workspace(model).get(("checked call", solver, backend, refine), build)
 
 
+def _prefer_general(model: StepModel, backend: object) -> None:
+    """The general QP answered a step of redundant rows: from now on ``model.step`` (qp) asks its compiled general
+    step first (:func:`general_hot`), not the equality kernel that cannot solve such a step."""
+    if backend is None or type(backend) is str:
+        ws = workspace(model)
+        for refine in (True, False):
+            ws.put(("checked call", "qp", backend, refine), None)
+
+
+def general_hot(model: StepModel, t: Any, q: Any, v: Any, lam: Any, solver: str, backend: object) -> StepResult | None:
+    """``model.step``'s hot path through the compiled general step (:mod:`gausspp.step.general.compiled`) of the
+    pattern last decided, or ``None`` when the full route must answer (inputs not plain float arrays of the right
+    shapes, no pattern decided yet, or its all-clear flag down)."""
+    if solver != "qp" or not (backend is None or type(backend) is str):
+        return None
+    if not (type(q) is np.ndarray and type(v) is np.ndarray) or q.shape != (model.nq,) or v.shape != (model.nv,):
+        return None
+    if q.dtype.kind != "f" or v.dtype.kind != "f":
+        return None
+    if lam is None:
+        lam = model.lam0
+    if type(lam) is not np.ndarray or lam.shape != (model.n_lam,) or lam.dtype.kind != "f":
+        return None
+    try:
+        t = float(t)
+    except (TypeError, ValueError):
+        return None
+    fast = general_step.compiled_outputs(model, t, q, v, lam, backend, NO_STAB)  # type: ignore[arg-type]
+    return None if fast is None else general_step.result_of(model, t, *fast)
+
+
 def _function(kernel: Kernel) -> ca.Function:
     assert isinstance(kernel, CompiledKernel)  # the direct step is always one compiled function
     return kernel.function
@@ -113,6 +147,7 @@ def _redundant_step(
         raise exc from None
     if solution.redundant_rows == 0:
         raise exc
+    _prefer_general(model, backend)
     return result
 
 
@@ -147,6 +182,7 @@ def _small_margin(
                     constraint=", ".join(model.names),
                     margin=result.margin,
                 )
+            _prefer_general(model, backend)
             return general
     warn_small_margin(result.margin, t, model.groups, model.margin_warn, stacklevel=6)
     return result

@@ -83,6 +83,14 @@ class StepResult:
         object.__setattr__(self, "__dict__", fields)
         return self
 
+    @classmethod
+    def of_fields(cls, fields: dict[str, object]) -> StepResult:
+        """The result with every field in ``fields``, already checked (the compiled general step's hot path),
+        built as :meth:`of_checked` builds it; takes ``fields`` over as the result's ``__dict__``."""
+        self = object.__new__(cls)
+        object.__setattr__(self, "__dict__", fields)
+        return self
+
     def disagreement(self, other: StepResult) -> float:
         """Largest relative difference in ``a`` and in ``u`` from another result of the same step.
 

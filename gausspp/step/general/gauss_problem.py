@@ -82,6 +82,8 @@ class GaussSolution:
     stages : list of str  which stages ran (``track``, ``compulsion``, ``least-norm``)
     S_norm : (k, m)       ``J A⁻¹ D`` with rows and columns normalized in ``A⁻¹`` (the realizability cosines)
     redundant_rows : int  how many equality rows were dependent on the others
+    kept_rows : the bilateral rows kept (the others dependent on them), as decided
+    kept_cols : the reaction unknowns whose columns of ``W = L⁻¹D`` are independent (in order), as decided
     """
 
     a: np.ndarray
@@ -93,6 +95,16 @@ class GaussSolution:
     stages: list[str] = field(default_factory=list)
     redundant_rows: int = 0
     S_norm: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    kept_rows: tuple[int, ...] = ()
+    kept_cols: tuple[int, ...] = ()
+
+    @classmethod
+    def of_fields(cls, fields: dict[str, object]) -> GaussSolution:
+        """The solution with every field in ``fields``, already checked, without the frozen dataclass's per-field
+        ``__init__`` (the compiled general step's hot path); takes ``fields`` over as its ``__dict__``."""
+        self = object.__new__(cls)
+        object.__setattr__(self, "__dict__", fields)
+        return self
 
 
 @dataclass(frozen=True)

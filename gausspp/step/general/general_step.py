@@ -13,14 +13,17 @@ from typing import Any
 import numpy as np
 
 from ...errors import InputError, NonFiniteError
+from ...workspace import workspace
 from .. import dense
 from ..data import NO_STAB, StepData, evaluate
 from ..protocol import StepModel
-from ..realizability import normalized_cosines
+from ..qp.casadi_conic import CasadiConic
+from ..realizability import margin_of, normalized_cosines
 from ..results import StepResult
+from .compiled import GeneralCall, Pattern
 from .manifold import on_manifold, reference_problem
 from .model_qp import closed_rows, gauss_problem
-from .solve import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, solve_general
+from .solve import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, resolve_backend, solve_general
 
 
 def _check_contacts(model: StepModel, t: float, d: StepData, closed: np.ndarray) -> None:
@@ -76,6 +79,93 @@ def _result(
     )
 
 
+def _backend(model: StepModel, backend: str | None) -> Any:
+    """The registry's backend for ``backend`` (kept per model: the hot path resolves no name)."""
+    return workspace(model).get(("general backend", backend), lambda: resolve_backend(backend))
+
+
+def _current(model: StepModel, backend: str | None, closed: Any, tol: float) -> list[GeneralCall | None]:
+    """The holder of the compiled call of the pattern last decided, for these arguments."""
+    key = None if closed is None else tuple(int(i) for i in np.atleast_1d(closed))
+    return workspace(model).get(("general pattern", backend, key, tol), lambda: [None])
+
+
+def compiled_outputs(
+    model: StepModel,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    lam: np.ndarray,
+    backend: str | None,
+    stab: Any,
+    closed: Any = None,
+    consistency_tol: float = CONSISTENCY_TOL,
+) -> tuple[GeneralCall, np.ndarray] | None:
+    """The compiled general step of the pattern last decided, if its all-clear flag is up at this state."""
+    call = _current(model, backend, closed, consistency_tol)[0]
+    if call is None:
+        return None
+    out = call(t, q, v, lam, stab)
+    return None if out is None else (call, out)
+
+
+def _remember(
+    model: StepModel, backend: str | None, closed: Any, tol: float, closed_rows_now: np.ndarray, sol: GaussSolution
+) -> None:
+    """After the Python route decided: compile (once per pattern) the step of that decision, for the next states."""
+    chosen = _backend(model, backend)
+    if not isinstance(chosen, CasadiConic):
+        return
+    pat = Pattern(tuple(int(i) for i in closed_rows_now), sol.kept_rows, sol.kept_cols, closed is not None)
+    if not pat.compilable(model):
+        return
+    call = workspace(model).get(("general call", chosen.name, pat, tol), lambda: GeneralCall(model, pat, chosen, tol))
+    _current(model, backend, closed, tol)[0] = call
+
+
+def _from_packed(
+    model: StepModel, t: float, call: GeneralCall, out: np.ndarray, solution: bool = True
+) -> tuple[StepResult, GaussSolution | None, dict[str, np.ndarray]]:
+    """The packed outputs of a compiled call as the Python route's three results (the solution only if asked)."""
+    f = {name: out[sl] for name, sl in call.slices.items()}
+    m, k = model.m, model.k
+    S = f["S"].reshape(call.k_all, call.m_all, order="F")
+    contact_force = np.zeros(call.nc_all)
+    contact_force[call.closed] = f["u"][m:]
+    at_bound = f["at_bound"] > 0.5
+    tracking = f["tracking_error"].item()
+    compulsion = f["compulsion"].item()
+    sol = None
+    if solution:
+        stages = ["compulsion", "track", "compulsion"] if f["saturated_branch"][0] > 0.5 else ["compulsion"]
+        if call.least_norm:
+            stages.append("least-norm")
+        pat = call.pattern
+        sol = GaussSolution.of_fields(dict(
+            a=f["a"], u=f["u"], compulsion=compulsion, residual=f["residual"], tracking_error=tracking,
+            at_bound=at_bound, stages=stages, redundant_rows=call.redundant, S_norm=S, kept_rows=pat.kept_rows,
+            kept_cols=pat.kept_cols,
+        ))  # fmt: skip
+    Sk = S[:k, :m]
+    cos = dense.singular_values(Sk) if k else np.zeros(0)
+    result = StepResult.of_fields(dict(
+        t=t, a=f["a"], u=f["u"][:m], reaction=f["reaction"], compulsion=compulsion, margin=margin_of(cos, k, m),
+        cosines=cos, residual=f["residual"][:k], constraint_value=f["Phi"], free_acceleration=f["a_free"],
+        solver=call.solver, qp_residuals=None, contact_force=contact_force, tracking_error=tracking,
+        saturated=at_bound[:m],
+    ))  # fmt: skip
+    extras = {
+        "qdot": f["qdot"], "energy": f["energy"], "power_forces": f["power"], "power_reaction": f["power_reaction"],
+        "g": f["g"], "S_norm": Sk,
+    }  # fmt: skip
+    return result, sol, extras
+
+
+def result_of(model: StepModel, t: float, call: GeneralCall, out: np.ndarray) -> StepResult:
+    """A compiled call's packed outputs as ``model.step``'s result alone."""
+    return _from_packed(model, t, call, out, solution=False)[0]
+
+
 def solve_at(
     model: StepModel,
     t: float,
@@ -86,12 +176,18 @@ def solve_at(
     stab: Any = NO_STAB,
     closed: Any = None,
     consistency_tol: float = CONSISTENCY_TOL,
+    compiled: bool = True,
 ) -> tuple[StepResult, GaussSolution, dict[str, np.ndarray]]:
     """The general step on checked inputs: the result, the QP's solution, and what a simulation records.
 
     The third item holds ``qdot``, ``energy``, ``power_forces``, ``power_reaction``, ``g`` and ``S_norm``
     (the normalized ``J A⁻¹ D`` of the bilateral rows), named as the compiled kernels name them.
+    ``compiled=False`` takes the Python route even where the compiled call of the pattern decided would answer.
     """
+    fast = compiled_outputs(model, t, q, v, lam, backend, stab, closed, consistency_tol) if compiled else None
+    if fast is not None:
+        return _from_packed(model, t, fast[0], fast[1])  # type: ignore[return-value]
+    given = closed
     d = evaluate(model, t, q, v, lam, stab)
     closed = closed_rows(model, d.gc, closed)
     _check_contacts(model, t, d, closed)
@@ -105,6 +201,8 @@ def solve_at(
         near_manifold=lambda: on_manifold(model, d.J, d.Phi, d.g, q, v),
     )
     result = _result(model, t, d, problem, free, sol, closed, backend)
+    if compiled:
+        _remember(model, backend, given, consistency_tol, closed, sol)
     extras = {
         "qdot": d.qdot,
         "energy": np.array([d.energy]),

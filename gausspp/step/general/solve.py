@@ -56,7 +56,7 @@ from .. import dense, qp
 from ..qp import QP, QPBackend
 from .gauss_problem import GaussProblem, GaussSolution, at, row_kinds
 from .kept_rows import NearManifold, Reference, decide_rows
-from .redundancy import DEPENDENCE_TOL
+from .redundancy import DEPENDENCE_TOL, independent_rows
 from .scaling import RANGE_TOL, RANK_TOL, Scaled, compress, range_basis, rank_of, scaled, svd_rank, truncated_pinv
 from .stage import DUAL_TOL, FEASIBILITY_TOL, solve_stage
 
@@ -81,7 +81,7 @@ TRACK_REGULARIZATION = 1e-12
 
 
 def default_backend() -> str:
-    """The general QP's default backend by its short name (``"daqp"``, else ``"osqp"``), see :func:`.qp.default`."""
+    """The general QP's default backend by its short name (``"qrqp"``, compiled into the step), see :func:`.qp.default`."""
     return qp.short_name(qp.get(qp.default("general")))
 
 
@@ -130,6 +130,7 @@ class _Setup:
     bounded: bool
     Ws: np.ndarray  # W / cs
     rank_W: int  # rank of the reaction columns, judged at the reference
+    kept_cols: np.ndarray  # the reaction columns independent of those before them, at the reference
     Q: np.ndarray | None  # without bounds: an orthonormal basis of range(Ws) (the compulsion stage's unknowns)
     backend: QPBackend
     where: str
@@ -166,6 +167,7 @@ class _Setup:
             bounded,
             Ws,
             rank_of(sv, DEPENDENCE_TOL),
+            independent_rows((ref.W / ref.cs).T, DEPENDENCE_TOL)[0],
             Q,
             backend,
             at(p.t),
@@ -281,6 +283,8 @@ def _solution(
         stages=stages,
         redundant_rows=redundant,
         S_norm=s.S,
+        kept_rows=tuple(int(i) for i in c.kept),
+        kept_cols=tuple(int(j) for j in c.kept_cols),
     )
 
 

@@ -19,11 +19,11 @@ Defaults, one per form, declared here (:func:`default`):
 * the compiled step: :data:`DEFAULT`, ``casadi:qrqp`` — measured fastest among the round-off-accurate
   backends (``benchmarks/step.py``: ≈1.5 µs per QP step, agreement with the direct solution at 1e-15);
   OSQP, the core dependency, is always available but iterative (≈13 µs, accurate only after polishing);
-* the general QP: the first installed of :data:`GENERAL_DEFAULTS`, ``qpsolvers:daqp`` then
-  ``qpsolvers:osqp``. Measured on ``benchmarks/general_qp.py`` (saturated crane, two-actuator servo
-  bounded and saturated, redundant four-bar): daqp, OSQP and ``casadi:qrqp`` agree to ≤ 1.2e-15, so
-  accuracy does not choose; daqp's QP time was the lowest on 4 of the 5 cases (qrqp's on the
-  saturated crane), and daqp is the default the tests and docs were measured with;
+* the general QP: the first installed of :data:`GENERAL_DEFAULTS`, ``casadi:qrqp`` (always there: casadi's own
+  active set, round-off accurate), then ``qpsolvers:daqp`` and ``qpsolvers:osqp``. qrqp is the one that sits
+  inside the compiled general step (:mod:`gausspp.step.general.compiled`: one C call per step, the QP in the
+  graph); the Python route that decides redundancy and diagnoses a failed step solves its stages with the same
+  backend. daqp, OSQP and qrqp agree to ≤ 1.2e-15 on ``benchmarks/general_qp.py``'s cases;
 * the cross-check's independent reference: the first installed of :data:`REFERENCE_DEFAULTS`.
 """
 
@@ -44,7 +44,7 @@ APPROXIMATE: frozenset[str] = frozenset({"casadi:highs"})
 #: The compiled step's default backend.
 DEFAULT = "casadi:qrqp"
 #: The general QP's default: the first of these installed here.
-GENERAL_DEFAULTS = ("qpsolvers:daqp", "qpsolvers:osqp")
+GENERAL_DEFAULTS = ("casadi:qrqp", "qpsolvers:daqp", "qpsolvers:osqp")
 #: The cross-check's reference (:mod:`gausspp.verification.crosscheck`): exact dense active-set codes first,
 #: OSQP last; none of them the compiled step's default, so that the reference shares no solver with it.
 REFERENCE_DEFAULTS = ("qpsolvers:daqp", "qpsolvers:quadprog", "qpsolvers:osqp")
