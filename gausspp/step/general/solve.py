@@ -81,7 +81,7 @@ TRACK_REGULARIZATION = 1e-12
 
 
 def default_backend() -> str:
-    """The general QP's default backend by its short name (``"qrqp"``, compiled into the step), see :func:`.qp.default`."""
+    """The general QP's default backend by its short name (``"qrqp"``): :func:`.qp.default`."""
     return qp.short_name(qp.get(qp.default("general")))
 
 
