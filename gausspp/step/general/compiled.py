@@ -25,8 +25,9 @@ at this state without a reference on the manifold, and the answer passes its che
 * every kept row's sine against the rows kept before it (in the metric ``A⁻¹``, the diagonal of the
   Cholesky factor of their Gram matrix) is at least :data:`~.redundancy.CLEARLY_INDEPENDENT`; every dropped
   row's sine against the kept rows before it at most :data:`~.redundancy.DEPENDENCE_TOL`, its right-hand
-  side agrees with theirs to the consistency tolerance, and the state is on the manifold to
-  :data:`~.manifold.REACH_TOL` (the witness that the dropped rows hold together);
+  side agrees with theirs to the consistency tolerance, and its residuals ``Φ_d``, ``g_d`` are the same
+  combination of the kept rows' residuals to :data:`~.manifold.REACH_TOL` (the witness that the dropped rows hold
+  together: to first order in the drift, what a state on the manifold would show);
 * the kept rows stay realizable: the Cholesky pivots of ``S Sᵀ`` on the kept and tracked rows are at least
   :data:`REALIZABLE_PIVOT` (a nearly unrealizable state goes to the Python route, which decides it);
 * the QP's answer is feasible (:data:`~.stage.FEASIBILITY_TOL`) and stationary (:data:`~.stage.DUAL_TOL`).
@@ -46,6 +47,7 @@ from ..bound import Bound
 from ..protocol import StepModel
 from ..qp import QPBackend, short_name
 from ..qp.casadi_conic import CasadiConic, stdout_silenced
+from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
 from .solve import TRACK_REGULARIZATION
@@ -161,6 +163,7 @@ class _Graph:
         cs = ca.sqrt(ca.sum1(W * W)).T
         cs = ca.if_else(cs == 0, 1, cs)
         Jn = Jt / norms
+        self.norms = norms  # the rows' lengths in A⁻¹
         Ws = W / ca.repmat(cs.T, W.shape[0], 1)
         S = Jn @ Ws
         Ja0 = J_all @ self.a0
@@ -222,22 +225,30 @@ class _Graph:
                 for _ in range(2):
                     row = row - (Bb.T @ (Bb @ row.T)).T
             checks.append(ca.norm_2(row) <= DEPENDENCE_TOL)
-            if K:
+            if K:  # as kept_rows.kept_rows judges agreement (the dropped row's sine is below DEPENDENCE_TOL here)
                 combo = ca.solve(G, Jn[K, :] @ Jn[d, :].T)
-                gap = ca.fabs(r[d] - combo.T @ r[K])
+                y = Jn[K, :].T @ ca.solve(G, r[K])
+                miss = ca.fabs(r[d] - combo.T @ r[K]) - AGREEMENT_SLACK * ca.norm_2(row) * ca.norm_2(y)
+                checks.append(miss <= tol * ca.fmax(scale, 1e-300) * (1 + ca.sum1(ca.fabs(combo))))
             else:
-                gap = ca.fabs(r[d])
-            checks.append(gap <= tol * ca.fmax(scale, 1e-300))
-        if dropped:  # a state on the constraints is the witness that the dropped rows hold together
+                checks.append(ca.fabs(r[d]) <= tol * ca.fmax(scale, 1e-300))
+        if dropped:  # the witness that the dropped rows hold together: their residuals follow the kept rows'
             J, Phi, g = p.J, p.Phi, p.g if p.g is not None else ca.SX.zeros(k)
             q, v = model.mechanism.q, model.mechanism.v
             nrm = ca.sqrt(ca.sum2(J * J))
             nrm = ca.if_else(nrm == 0, 1, nrm)
-            off = ca.fabs(Phi) / nrm / (1 + ca.mmax(ca.fabs(v)))
-            hol = model.holonomic_rows
-            off_g = ca.fabs(g[hol]) / nrm[hol] / (1 + ca.mmax(ca.fabs(q))) if hol else ca.SX(0)
-            checks.append(ca.mmax(off) <= REACH_TOL)
-            checks.append(ca.mmax(off_g) <= REACH_TOL)
+            hol = set(model.holonomic_rows)
+            for d in dropped:
+                # d's row is (to its sine) the combination c of the kept rows, in A⁻¹-normalized units: to first
+                # order in the drift its residuals are that combination of theirs (a row of another constraint,
+                # e.g. a length that contradicts the loop, misses by the contradiction itself)
+                c = ca.solve(G, Jn[K, :] @ Jn[d, :].T) if K else ca.SX(0, 1)
+                w = c * self.norms[d] / self.norms[K] if K else c  # J_d ≈ Σ w_i J_i, unnormalized
+                fit_v = (Phi[d] - (w.T @ Phi[K] if K else 0)) / nrm[d]
+                checks.append(ca.fabs(fit_v) <= REACH_TOL * (1 + ca.mmax(ca.fabs(v))))
+                if d in hol:
+                    fit_g = (g[d] - (w.T @ g[K] if K else 0)) / nrm[d]
+                    checks.append(ca.fabs(fit_g) <= REACH_TOL * (1 + ca.mmax(ca.fabs(q))))
         rows = K + self.T
         if rows:
             Sk = self.S[rows, self.kc]

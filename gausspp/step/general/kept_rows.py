@@ -22,6 +22,9 @@ from .gauss_problem import GaussProblem, at, row_kinds, row_names
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL, independent_rows
 from .scaling import Scaled, rank_of, scaled
 
+#: A dropped row at the angle ``s`` from the kept rows' span may miss their right-hand sides by this many ``s‖y‖``.
+AGREEMENT_SLACK = 10.0
+
 #: The problem on the manifold, or a function that builds it (``None``: the state is on it already).
 Reference = GaussProblem | Callable[[], GaussProblem | None] | None
 
@@ -37,8 +40,14 @@ class Rows:
 
 def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
     """The bilateral rows kept (:func:`~gausspp.step.redundancy.independent_rows` at ``ref``), how far the
-    dropped ones contradict the kept ones there (relative to the right-hand side's size), and each row's sine
-    against the rows kept before it."""
+    dropped ones contradict the kept ones there, and each row's sine against the rows kept before it.
+
+    The contradiction of a dropped row ``d = cᵀ K + s n`` (``s`` its sine against the kept rows ``K``) is what its
+    right-hand side misses, less the ``s ‖y‖`` its own angle explains (``y`` the whitened reaction), relative to
+    the right-hand side's size times ``1 + ‖c‖₁`` (round-off in the kept rows' right-hand sides multiplied by the
+    combination): zero for rows dependent everywhere, and for a linkage passing a singular position on its branch;
+    of order one for rows that describe different constraints.
+    """
     eq_rows = np.flatnonzero(eq)
     kept_local, sines = independent_rows(ref.Jn[eq_rows])
     kept = eq_rows[kept_local]
@@ -47,12 +56,19 @@ def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarra
         keep = np.zeros(eq_rows.size, bool)
         keep[kept_local] = True
         dropped = eq_rows[~keep]
+        scale = max(ref.scale, 1e-300)
         if kept.size:  # each dropped row as a combination of the kept ones; its right-hand side must follow
             combo = dense.lstsq(ref.Jn[kept].T, ref.Jn[dropped].T)
-            gap = float(np.abs(ref.r[dropped] - combo.T @ ref.r[kept]).max())
+            miss = np.abs(ref.r[dropped] - combo.T @ ref.r[kept]) / scale
+            # what agreement can mean: a row at the angle s from the kept rows' span misses by up to s‖y‖ (y the
+            # whitened reaction, here the kept rows' least-norm one), and round-off in the kept rows' right-hand
+            # sides comes in multiplied by the combination's size — near a singular position both are large
+            y = ref.Jn[kept].T @ dense.lstsq(ref.Jn[kept] @ ref.Jn[kept].T, ref.r[kept])
+            explained = AGREEMENT_SLACK * sines[dropped] * float(np.linalg.norm(y)) / scale
+            gap = float(np.max(np.maximum(miss - explained, 0.0) / (1.0 + np.abs(combo).sum(axis=0))))
         else:
-            gap = float(np.abs(ref.r[dropped]).max())
-    return kept, gap / max(ref.scale, 1e-300), sines
+            gap = float(np.abs(ref.r[dropped]).max()) / scale
+    return kept, gap, sines
 
 
 def check_realizable(p: GaussProblem, ref: Scaled, mask: np.ndarray) -> None:
