@@ -16,7 +16,7 @@ from ..model.model import Model
 from ..step import qp
 from ..step.bound import sparse_output
 from ..step.expressions import OUTPUTS
-from ..step.general import check_backend
+from ..step.general import check_backend, general_step
 from ..step.kernel import Bound, CompiledKernel
 from ..step.outcome import QP_TOLERANCE, Where, evaluation_failed, step_margin, to_result
 from ..step.realizability import stacked_margins
@@ -225,6 +225,9 @@ def _stacked(res: np.ndarray, shape: tuple[int, int], n: int) -> np.ndarray:
     return res.reshape(n, all_cols // n, rows).transpose(0, 2, 1)
 
 
+_NO_STAB = np.zeros(2)
+
+
 class GeneralRightHandSide(_StateDerivative):
     """``F(t, y)`` through the general Gauss QP (:meth:`Model.general_step`): bounded actuators and
     redundant constraint rows. One numeric QP per evaluation, from Python (tens to hundreds of µs)."""
@@ -254,6 +257,10 @@ class GeneralRightHandSide(_StateDerivative):
                 "reduce dt or use a stiff method"
             )
         m = self.model
+        stab = self.stab if stabilized else _NO_STAB
+        fast = general_step.compiled_outputs(m, float(t), y[sq], y[sv], y[sl], self.backend, stab)
+        if fast is not None:
+            return general_step.rhs_outputs(m, *fast)
         res, _, extras = m.general_step_full(
             float(t),
             y[sq],

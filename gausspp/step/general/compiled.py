@@ -263,6 +263,19 @@ def _conic(name: str, backend: CasadiConic, mk: int, rows: int) -> ca.Function:
         return ca.conic(name, backend.plugin, sparsity, backend.options)
 
 
+def _equality_qp(H: ca.SX, S: ca.SX, r: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """``min ½ xᵀHx`` s.t. ``S x = r`` (H positive definite, S of full row rank) and the rows' multipliers in
+    casadi's convention (``H x + Sᵀλ = 0``), by a Cholesky factor of ``H`` and one of ``S H⁻¹ Sᵀ``."""
+    if not S.shape[0]:
+        return ca.SX.zeros(H.shape[0]), ca.SX(0, 1)
+    Rh = ca.chol(H)
+    Y = ca.solve(Rh.T, S.T)  # R⁻ᵀ Sᵀ
+    M = Y.T @ Y
+    Rm = ca.chol(M)
+    mu = ca.solve(Rm, ca.solve(Rm.T, r))
+    return ca.solve(Rh, Y @ mu), -mu
+
+
 def _carry(model: StepModel, pat: Pattern, gr: _Graph) -> dict[str, Any]:
     """What the function after the QP reads of the model's data (computed once, before the QP)."""
     p, mech, c = model.expressions, model.mechanism, model.contact_expressions
@@ -346,6 +359,13 @@ class GeneralCall:
         ins = model.inputs
         mk, n_rows = len(gr.kc), gr.Aqp.shape[0]
         carry = _carry(model, pat, gr)
+        syms = {name: ca.SX.sym(name, ca.Sparsity.dense(*ca.SX(value).shape)) for name, value in carry.items()}
+        if not (gr.T or gr.C or pat.closed or np.isfinite(gr.lower).any() or np.isfinite(gr.upper).any()):
+            # equality rows only: the QP in closed form, ũ = H⁻¹Sᵀ(S H⁻¹ Sᵀ)⁻¹ r — one flat SX function
+            post = self._post(model, pat, gr, syms, mk, n_rows)
+            x, lam_a = _equality_qp(gr.H, gr.Aqp, gr.lba)
+            outs = post.call([*carry.values(), x, lam_a, ca.SX.zeros(mk), gr.lba, gr.uba, ca.SX(0), ca.SX.zeros(mk)])
+            return ca.Function("general_step", ins, ca.cse([ca.densify(o) for o in outs]))
         qp_data = [gr.H, gr.Aqp, gr.lba, gr.uba, gr.lbx, gr.ubx]
         if gr.T:
             qp_data += [gr.Ht, gr.gt, gr.At, gr.lbt, gr.ubt, gr.S[gr.T, gr.kc]]
@@ -377,7 +397,6 @@ class GeneralCall:
             uba = ca.if_else(feasible, uba, uba2, True)
             saturated = 1 - feasible
             x_track = xt
-        syms = {name: ca.SX.sym(name, ca.Sparsity.dense(*ca.SX(value).shape)) for name, value in carry.items()}
         post = self._post(model, pat, gr, syms, mk, n_rows)
         packed = post.call([*carried, x, lam_a, lam_x, lba, uba, saturated, x_track])
         return ca.Function("general_step", mx_in, packed)

@@ -161,6 +161,19 @@ def _from_packed(
     return result, sol, extras
 
 
+def rhs_outputs(model: StepModel, call: GeneralCall, out: np.ndarray) -> dict[str, np.ndarray]:
+    """A compiled call's packed outputs as a simulation's right-hand side reads them (no result objects, no
+    margin: the recording computes what it keeps)."""
+    f = {name: out[sl] for name, sl in call.slices.items()}
+    m, k = model.m, model.k
+    return {
+        "a": f["a"], "u": f["u"][:m], "reaction": f["reaction"], "compulsion": f["compulsion"], "Phi": f["Phi"],
+        "tracking_error": f["tracking_error"], "saturated": f["at_bound"][:m] > 0.5, "qdot": f["qdot"],
+        "energy": f["energy"], "power_forces": f["power"], "power_reaction": f["power_reaction"], "g": f["g"],
+        "S_norm": f["S"].reshape(call.k_all, call.m_all, order="F")[:k, :m],
+    }  # fmt: skip
+
+
 def result_of(model: StepModel, t: float, call: GeneralCall, out: np.ndarray) -> StepResult:
     """A compiled call's packed outputs as ``model.step``'s result alone."""
     return _from_packed(model, t, call, out, solution=False)[0]
