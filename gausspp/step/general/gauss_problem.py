@@ -84,6 +84,7 @@ class GaussSolution:
     redundant_rows : int  how many equality rows were dependent on the others
     kept_rows : the bilateral rows kept (the others dependent on them), as decided
     kept_cols : the reaction unknowns whose columns of ``W = L⁻¹D`` are independent (in order), as decided
+    isolated_rank_drop : rows kept on the open piece of the manifold were dropped at this isolated singular position
     """
 
     a: np.ndarray
@@ -97,6 +98,7 @@ class GaussSolution:
     S_norm: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     kept_rows: tuple[int, ...] = ()
     kept_cols: tuple[int, ...] = ()
+    isolated_rank_drop: bool = False
 
     @classmethod
     def of_fields(cls, fields: dict[str, object]) -> GaussSolution:

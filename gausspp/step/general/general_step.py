@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ...errors import InputError, NonFiniteError
+from ...errors import InputError, NonFiniteError, RealizabilityError
 from ...workspace import workspace
 from .. import dense
 from ..data import NO_STAB, StepData, evaluate
@@ -144,7 +144,7 @@ def _from_packed(
         sol = GaussSolution.of_fields(dict(
             a=f["a"], u=f["u"], compulsion=compulsion, residual=f["residual"], tracking_error=tracking,
             at_bound=at_bound, stages=stages, redundant_rows=call.redundant, S_norm=S, kept_rows=pat.kept_rows,
-            kept_cols=pat.kept_cols,
+            kept_cols=pat.kept_cols, isolated_rank_drop=False,
         ))  # fmt: skip
     Sk = S[:k, :m]
     cos = dense.singular_values(Sk) if k else np.zeros(0)
@@ -179,6 +179,28 @@ def result_of(model: StepModel, t: float, call: GeneralCall, out: np.ndarray) ->
     return _from_packed(model, t, call, out, solution=False)[0]
 
 
+def _reference(
+    model: StepModel,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    lam: np.ndarray,
+    stab: Any,
+    closed: np.ndarray,
+    on_a_piece: bool,
+) -> GaussProblem | None:
+    """The problem at the nearest state on the manifold (:func:`.manifold.reference_problem`). Coming from an open
+    piece of the manifold (``on_a_piece``), a nearest state not found — Gauss–Newton stalls at a singular position,
+    where the rows' rank drops — means: decide at the state itself (the rows kept there are judged by
+    ``kept_before``), not that the constraints contradict each other."""
+    try:
+        return reference_problem(model, t, q, v, lam, stab, closed)
+    except RealizabilityError:
+        if not on_a_piece:
+            raise
+        return None
+
+
 def solve_at(
     model: StepModel,
     t: float,
@@ -205,16 +227,18 @@ def solve_at(
     closed = closed_rows(model, d.gc, closed)
     _check_contacts(model, t, d, closed)
     problem, free = _problem(model, t, d, closed)
+    current = _current(model, backend, given, consistency_tol)[0] if compiled else None
     sol = solve_general(
         problem,
         backend,
         consistency_tol,
-        reference=lambda: reference_problem(model, t, q, v, lam, stab, closed),
+        kept_before=None if current is None else current.pattern.kept_rows,
+        reference=lambda: _reference(model, t, q, v, lam, stab, closed, current is not None),
         # a state on the constraints is itself the witness that dependent rows hold together
         near_manifold=lambda: on_manifold(model, d.J, d.Phi, d.g, q, v),
     )
     result = _result(model, t, d, problem, free, sol, closed, backend)
-    if compiled:
+    if compiled and not sol.isolated_rank_drop:  # an isolated singular position keeps the open piece's decision
         _remember(model, backend, given, consistency_tol, closed, sol)
     extras = {
         "qdot": d.qdot,

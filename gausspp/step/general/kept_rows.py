@@ -36,6 +36,7 @@ class Rows:
     ref: Scaled
     kept: np.ndarray
     redundant: int
+    isolated: bool = False  # rows kept on the open piece were dropped at an isolated singular position
 
 
 def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
@@ -113,9 +114,21 @@ NearManifold = bool | Callable[[], bool]
 
 
 def decide_rows(
-    p: GaussProblem, s: Scaled, consistency_tol: float, reference: Reference, near_manifold: NearManifold
+    p: GaussProblem,
+    s: Scaled,
+    consistency_tol: float,
+    reference: Reference,
+    near_manifold: NearManifold,
+    kept_before: tuple[int, ...] | None = None,
 ) -> Rows:
-    """The rows kept (see the module docstring); ``s`` is ``p`` scaled, the reference unless one is needed."""
+    """The rows kept (see the module docstring); ``s`` is ``p`` scaled, the reference unless one is needed.
+
+    ``kept_before``: the rows the decision on the open piece of the manifold the motion comes from kept (the
+    compiled step's pattern). A row among them found dependent here lost its independence at an isolated
+    position — a parallelogram's collinear one, where the rows' rank drops at one instant — and is dropped for
+    this state without being called a contradiction: what it misses there is the drift, amplified by the rows'
+    vanishing angle, not another constraint.
+    """
     kinds = row_kinds(p)
     eq, track = kinds.eq, kinds.track
     ref = s
@@ -132,6 +145,8 @@ def decide_rows(
             ref = scaled(on_manifold)
             kept, gap, sines = kept_rows(ref, eq)
     check_realizable(p, ref, eq | track)
-    if gap > consistency_tol:
+    dropped = set(np.flatnonzero(eq).tolist()) - set(kept.tolist())
+    isolated = kept_before is not None and dropped <= set(kept_before)
+    if gap > consistency_tol and not isolated:
         raise _contradiction(p, eq, gap)
-    return Rows(ref, kept, int(eq.sum()) - kept.size)
+    return Rows(ref, kept, int(eq.sum()) - kept.size, isolated and gap > consistency_tol)

@@ -48,7 +48,7 @@ here, the order of the stages.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -294,6 +294,7 @@ def solve_general(
     consistency_tol: float = CONSISTENCY_TOL,
     reference: Reference = None,
     near_manifold: NearManifold = False,
+    kept_before: tuple[int, ...] | None = None,
 ) -> GaussSolution:
     """Solve the general Gauss step (see the module docstring) with a registry ``backend``.
 
@@ -304,7 +305,8 @@ def solve_general(
     redundant, and whether they agree, is decided there (:mod:`gausspp.step.kept_rows`); ``p`` is then solved with
     the kept rows. ``near_manifold``: the state itself satisfies the constraints to within the caller's
     tolerance, so dropped rows need no reference to show that they can hold together (or a function that
-    tells, called only when rows were dropped). ``consistency_tol``: how
+    tells, called only when rows were dropped). ``kept_before``: the rows the decision on the open piece of the
+    manifold kept (:func:`~gausspp.step.general.kept_rows.decide_rows`). ``consistency_tol``: how
     far (relative) dependent rows may disagree at the reference before it is an error.
 
     Raises
@@ -324,9 +326,10 @@ def solve_general(
     """
     chosen = resolve_backend(backend, p)
     s = scaled(p)
-    rows = decide_rows(p, s, consistency_tol, reference, near_manifold)
+    rows = decide_rows(p, s, consistency_tol, reference, near_manifold, kept_before)
     setup = _Setup.build(p, s, rows.ref, rows.kept, chosen)
     stages: list[str] = []
     w, x, tracking_error = _reaction(setup, stages)
     u = _least_norm(setup, w, x, stages)
-    return _solution(setup, u, w, tracking_error, stages, rows.redundant)
+    solution = _solution(setup, u, w, tracking_error, stages, rows.redundant)
+    return replace(solution, isolated_rank_drop=True) if rows.isolated else solution
