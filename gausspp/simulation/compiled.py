@@ -142,8 +142,9 @@ def integrate_compiled(
     """Run a compiled-lane method; return ``(t, Y, steps, failure, rhs evaluations, QP solutions)`` on the recorded
     grid. The QP solutions (one row per kept sample, NaN where no step starts) are those of each step's first stage,
     the step at the sample itself — given only for a QP step without Baumgarte terms (``None`` otherwise)."""
-    if meth.name == "cvodes":
-        return _cvodes(model, rhs_function(model, solver, backend), solver, stab, t0, t_end, dt, y0, rtol, atol, record)
+    if meth.name in CVODES:
+        F = rhs_function(model, solver, backend)
+        return cvodes_run(meth.name, F, stab, t0, t_end, dt, y0, rtol, atol, record)
     assert meth.tableau is not None and dt is not None
     n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
     times = t0 + dt * np.arange(n_steps + 1)
@@ -244,10 +245,13 @@ def _on_grid(times: np.ndarray, record: Any) -> np.ndarray:
     return idx
 
 
-def _cvodes(
-    model: Model,
+#: The CVODES methods and their linear multistep family (Adams with functional iteration needs no Jacobian).
+CVODES = {"cvodes": "bdf", "cvodes-adams": "adams"}
+
+
+def cvodes_run(
+    method: str,
     F: ca.Function,
-    solver: str,
     stab: Stabilization,
     t0: float,
     t_end: float,
@@ -270,6 +274,8 @@ def _cvodes(
         "max_num_steps": MAX_CVODES_STEPS,
         "disable_internal_warnings": True,
     }
+    if CVODES[method] == "adams":
+        opts.update(linear_multistep_method="adams", nonlinear_solver_iteration="functional")
     if dt:  # as for scipy's methods: dt is the first and the largest step
         opts.update(step0=dt, max_step_size=dt)
 

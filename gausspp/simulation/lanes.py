@@ -113,10 +113,22 @@ LANES: dict[str, Lane] = {
         Lane(
             "cvodes",
             "the compiled step through SUNDIALS CVODES",
-            ("cvodes",),
+            ("cvodes", "cvodes-adams"),
             (SMOOTH,),
             ("direct",),
             solver_reason="CVODES differentiates the right-hand side",
+            qp_in_graph=True,
+            project=False,
+            no_project_reason="it cannot project between its internal steps",
+        ),
+        Lane(
+            "cvodes-general",
+            "the compiled general step (the pattern decided, :mod:`gausspp.step.general.compiled`) through SUNDIALS "
+            "CVODES, continued by scipy's DOP853 where the pattern changes",
+            ("cvodes", "cvodes-adams"),
+            (GENERAL,),
+            ("qp",),
+            solver_reason="the general step is the Gauss QP",
             qp_in_graph=True,
             project=False,
             no_project_reason="it cannot project between its internal steps",
@@ -194,8 +206,8 @@ def check_solver(method: Method, solver: str, backend: str | None, lane: str | N
         raise InputError(f"backend={backend!r} applies to solver='qp' only")
     running = _named(method, lane)
     refusals = {one.name: _refusal(one, method, solver, backend) for one in running}
-    smooth = [one for one in running if SMOOTH in one.kinds]
-    if smooth and all(refusals[one.name] for one in smooth):
+    if all(refusals.values()):  # no kind of model could run: the reason of the fastest lane for smooth models
+        smooth = [one for one in running if SMOOTH in one.kinds] or running
         raise InputError(refusals[smooth[0].name])
     return tuple(one for one in running if not refusals[one.name])
 
@@ -247,6 +259,9 @@ def check_kind(method: Method, kind: Kind, solver: str, project: bool, among: tu
     among = tuple(_lanes_running(method)) if among is None else among
     fits = [lane for lane in among if kind.name in lane.kinds]
     if not fits:
+        for lane in _lanes_running(method):  # a lane for this kind that refuses the solver says why
+            if kind.name in lane.kinds and (reason := _refusal(lane, method, solver, None)):
+                raise InputError(reason)
         other = lane_of(method, kind)  # refuses, naming the methods that can, unless another lane runs it
         raise InputError(
             f"the {' or '.join(lane.name for lane in among)} lane cannot run method {method.name!r} on "

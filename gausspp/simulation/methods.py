@@ -86,6 +86,13 @@ METHODS: dict[str, Method] = {
             True,
             "SUNDIALS CVODES variable-order BDF via casadi (direct path); stays at order 1 when the step is imposed",
         ),
+        Method(
+            "cvodes-adams",
+            1,
+            True,
+            "SUNDIALS CVODES variable-order (1–12) Adams–Moulton via casadi, functional iteration (non-stiff; no "
+            "Jacobian); stays at order 1 when the step is imposed",
+        ),
     )
 }
 

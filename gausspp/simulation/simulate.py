@@ -26,6 +26,7 @@ from . import methods as _methods
 from .compiled import integrate_compiled
 from .drift import Baumgarte, Stabilization, as_stabilization
 from .events import run_contacts
+from .general_cvodes import run_general_cvodes
 from .initial import check_on_constraint, initial_state, project_initial, redundant_rows
 from .inputs import Options, check_options
 from .integrate import run_python, run_scipy
@@ -206,6 +207,7 @@ def _run(
         "scipy": lambda: run_scipy(rhs, opts, y0),
         "compiled": lambda: _run_compiled(rhs, model, stab, opts, y0),
         "cvodes": lambda: _run_compiled(rhs, model, stab, opts, y0),
+        "cvodes-general": lambda: run_general_cvodes(rhs, model, stab, opts, y0),  # type: ignore[arg-type]
     }
     try:
         return runners[lane.name]()

@@ -521,6 +521,12 @@ class GeneralCall:
             [ca.vertcat(packed, flag, G["closed_ok"])],
         )
 
+    @property
+    def function(self) -> ca.Function:
+        """The compiled step ``(t, q, v, λ, stab) ↦ [packed outputs (:attr:`slices`), flag, closed as the gaps say]``
+        (to build larger graphs: a pattern with equality rows only is one SX function)."""
+        return self._bound.fn
+
     def __call__(self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, stab: np.ndarray) -> np.ndarray | None:
         """The packed outputs (a copy), or ``None`` when the flag is down (or the gaps close other contacts and the
         caller did not name them)."""

@@ -90,6 +90,11 @@ def _current(model: StepModel, backend: str | None, closed: Any, tol: float) -> 
     return workspace(model).get(("general pattern", backend, key, tol), lambda: [None])
 
 
+def current_call(model: StepModel, backend: str | None, closed: Any, tol: float) -> GeneralCall | None:
+    """The compiled call of the pattern last decided for these arguments (``None`` before any decision)."""
+    return _current(model, backend, closed, tol)[0]
+
+
 def compiled_outputs(
     model: StepModel,
     t: float,
