@@ -273,6 +273,7 @@ def cvodes_run(
         "reltol": rtol,
         "max_num_steps": MAX_CVODES_STEPS,
         "disable_internal_warnings": True,
+        "show_eval_warnings": False,  # a NaN from a general step's flag stops CVODES: said by the failure, not logged
     }
     if CVODES[method] == "adams":
         opts.update(linear_multistep_method="adams", nonlinear_solver_iteration="functional")

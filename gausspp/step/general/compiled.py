@@ -51,7 +51,7 @@ from ..qp import QPBackend, short_name
 from ..qp.casadi_conic import CasadiConic, stdout_silenced
 from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
-from .redundancy import DEPENDENCE_TOL
+from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
 from .solve import TRACK_REGULARIZATION
 from .stage import DUAL_TOL, FEASIBILITY_TOL
 
@@ -65,6 +65,9 @@ KEPT_FLOOR = 0.0
 #: Below this smallest pivot of ``S H⁻¹ Sᵀ`` (unit-free) the equality step is damped in proportion to the state's
 #: drift from the manifold (:func:`_equality_qp`).
 SINGULAR_BAND = 1e-6
+#: At the singular position itself (smallest pivot² of ``S`` below this, ~10 round-offs of its unit diagonal) the
+#: symmetric step adds this damping, so that the factorization exists; nowhere else.
+SINGULAR_FLOOR = 1e-15
 
 
 @dataclass(frozen=True)
@@ -244,6 +247,10 @@ class _Graph:
             Rk = ca.chol(G)
             checks.append(ca.mmin(ca.diag(Rk)) >= KEPT_FLOOR)
             B = ca.solve(Rk.T, Jn[K, :])  # orthonormal rows spanning the kept rows, in their order
+            # as kept_rows.kept_rows judges a gap: nearly dependent kept rows (near a singular position, where the
+            # decision of the open piece holds) amplify drift and round-off in what the dropped rows are tested on
+            relax = ca.fmin(1, ca.mmin(ca.diag(Rk)) / CLEARLY_INDEPENDENT)
+            singular = ca.logic_not(relax > 0)  # the kept rows' rank drops here (NaN pivot): the open piece decides
         for d in dropped:
             before = sum(1 for i in K if i < d)
             row = Jn[d, :]
@@ -251,12 +258,13 @@ class _Graph:
                 Bb = B[:before, :]
                 for _ in range(2):
                     row = row - (Bb.T @ (Bb @ row.T)).T
-            checks.append(ca.norm_2(row) <= DEPENDENCE_TOL)
+            checks.append(ca.logic_or(singular, ca.norm_2(row) * relax <= DEPENDENCE_TOL))
             if K:  # as kept_rows.kept_rows judges agreement (the dropped row's sine is below DEPENDENCE_TOL here)
                 combo = ca.solve(G, Jn[K, :] @ Jn[d, :].T)
                 y = Jn[K, :].T @ ca.solve(G, r[K])
                 miss = ca.fabs(r[d] - combo.T @ r[K]) - AGREEMENT_SLACK * ca.norm_2(row) * ca.norm_2(y)
-                checks.append(miss <= tol * ca.fmax(scale, 1e-300) * (1 + ca.sum1(ca.fabs(combo))))
+                agree = miss * relax <= tol * ca.fmax(scale, 1e-300) * (1 + ca.sum1(ca.fabs(combo)))
+                checks.append(ca.logic_or(singular, agree))
             else:
                 checks.append(ca.fabs(r[d]) <= tol * ca.fmax(scale, 1e-300))
         if dropped:  # the witness that the dropped rows hold together: their residuals follow the kept rows'
@@ -291,6 +299,24 @@ def _conic(name: str, backend: CasadiConic, mk: int, rows: int) -> ca.Function:
     sparsity = {"h": ca.Sparsity.dense(mk, mk), "a": ca.Sparsity.dense(rows, mk)}
     with stdout_silenced():
         return ca.conic(name, backend.plugin, sparsity, backend.options)
+
+
+def _symmetric_qp(H: ca.SX, S: ca.SX, r: ca.SX, drift: ca.SX) -> tuple[ca.SX, ca.SX]:
+    """:func:`_equality_qp` where ``S`` is square and symmetric positive definite by construction (ideal rows,
+    ``D = Jᵀ``, kept rows and columns alike: ``S`` is the rows' Gram matrix in ``A⁻¹``): the rows fix ``x``,
+    ``S x = r`` by a Cholesky factor of ``S`` alone — conditioning ``1/σ``, not the ``1/σ²`` of ``S H⁻¹ Sᵀ`` —
+    damped in the band around a singular position as there."""
+    rows = S.shape[0]
+    if not rows:
+        return ca.SX.zeros(H.shape[0]), ca.SX(0, 1)
+    pivots = ca.diag(ca.chol(S))
+    smallest = ca.mmin(ca.if_else(pivots * pivots >= 0, pivots * pivots, 0))
+    band = SINGULAR_BAND
+    damping = drift * band**2 / (band**2 + smallest * smallest)
+    damping = ca.if_else(smallest > SINGULAR_FLOOR, damping, damping + SINGULAR_FLOOR)  # at the position itself
+    Rs = ca.chol(S + damping * ca.DM.eye(rows))
+    x = ca.solve(Rs, ca.solve(Rs.T, r))
+    return x, ca.solve(Rs, ca.solve(Rs.T, -(H @ x)))  # S symmetric: λ = −S⁻¹ H x
 
 
 def _equality_qp(H: ca.SX, S: ca.SX, r: ca.SX, drift: ca.SX) -> tuple[ca.SX, ca.SX]:
@@ -405,7 +431,8 @@ class GeneralCall:
         if not (gr.T or gr.C or pat.closed or np.isfinite(gr.lower).any() or np.isfinite(gr.upper).any()):
             # equality rows only: the QP in closed form, ũ = H⁻¹Sᵀ(S H⁻¹ Sᵀ)⁻¹ r — one flat SX function
             post = self._post(model, pat, gr, syms, mk, n_rows)
-            x, lam_a = _equality_qp(gr.H, gr.Aqp, gr.lba, gr.drift)
+            symmetric = bool(getattr(model, "symmetric_S", False)) and pat.kept_rows == pat.kept_cols
+            x, lam_a = (_symmetric_qp if symmetric else _equality_qp)(gr.H, gr.Aqp, gr.lba, gr.drift)
             outs = post.call([*carry.values(), x, lam_a, ca.SX.zeros(mk), gr.lba, gr.uba, ca.SX(0), ca.SX.zeros(mk)])
             return ca.Function("general_step", ins, ca.cse([ca.densify(o) for o in outs]))
         qp_data = [gr.H, gr.Aqp, gr.lba, gr.uba, gr.lbx, gr.ubx]

@@ -46,8 +46,9 @@ def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarra
     The contradiction of a dropped row ``d = cᵀ K + s n`` (``s`` its sine against the kept rows ``K``) is what its
     right-hand side misses, less the ``s ‖y‖`` its own angle explains (``y`` the whitened reaction), relative to
     the right-hand side's size times ``1 + ‖c‖₁`` (round-off in the kept rows' right-hand sides multiplied by the
-    combination): zero for rows dependent everywhere, and for a linkage passing a singular position on its branch;
-    of order one for rows that describe different constraints.
+    combination) and over ``min(1, s_K / CLEARLY_INDEPENDENT)`` (``s_K`` the kept rows' smallest sine: nearly
+    dependent kept rows amplify drift and round-off by ``1/s_K``): zero for rows dependent everywhere, and for a
+    linkage passing a singular position on its branch; of order one for rows that describe different constraints.
     """
     eq_rows = np.flatnonzero(eq)
     kept_local, sines = independent_rows(ref.Jn[eq_rows])
@@ -67,6 +68,9 @@ def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarra
             y = ref.Jn[kept].T @ dense.lstsq(ref.Jn[kept] @ ref.Jn[kept].T, ref.r[kept])
             explained = AGREEMENT_SLACK * sines[dropped] * float(np.linalg.norm(y)) / scale
             gap = float(np.max(np.maximum(miss - explained, 0.0) / (1.0 + np.abs(combo).sum(axis=0))))
+            # kept rows that are themselves nearly dependent (near a singular position) amplify the drift and
+            # round-off in their right-hand sides by one over their smallest sine: a gap is judged against that
+            gap *= min(1.0, float(sines[kept].min()) / CLEARLY_INDEPENDENT)
         else:
             gap = float(np.abs(ref.r[dropped]).max()) / scale
     return kept, gap, sines
@@ -146,7 +150,7 @@ def decide_rows(
             kept, gap, sines = kept_rows(ref, eq)
     check_realizable(p, ref, eq | track)
     dropped = set(np.flatnonzero(eq).tolist()) - set(kept.tolist())
-    isolated = kept_before is not None and dropped <= set(kept_before)
+    isolated = kept_before is not None and bool(dropped & set(kept_before))  # a row independent before
     if gap > consistency_tol and not isolated:
         raise _contradiction(p, eq, gap)
     return Rows(ref, kept, int(eq.sum()) - kept.size, isolated and gap > consistency_tol)
