@@ -83,7 +83,7 @@ KINDS: dict[str, Kind] = {
             ("qp",),
             "rk4",
             task="solve the general Gauss QP",
-            needs="the general Gauss QP at every step, from Python",
+            needs="the general Gauss QP at every step (compiled, or from Python where its pattern changes)",
         ),
         Kind(
             CONTACTS,

@@ -230,7 +230,9 @@ _NO_STAB = np.zeros(2)
 
 class GeneralRightHandSide(_StateDerivative):
     """``F(t, y)`` through the general Gauss QP (:meth:`Model.general_step`): bounded actuators and
-    redundant constraint rows. One numeric QP per evaluation, from Python (tens to hundreds of µs)."""
+    redundant constraint rows. Each evaluation is the compiled general step of the pattern decided (one C call,
+    :mod:`gausspp.step.general.compiled`) when its all-clear flag is up, else the Python route, which decides the
+    pattern again."""
 
     kernel = None
 
