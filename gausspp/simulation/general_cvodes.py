@@ -6,8 +6,8 @@ Adams–Moulton with functional iteration: ``method="cvodes-adams"``) integrates
 per evaluation. The function returns NaN where the pattern's all-clear flag is down, so that CVODES stops
 there; the run then goes on from the last output time reached with scipy's DOP853 at the same tolerances,
 whose right-hand side takes the Python route and decides the pattern again. A pattern with inequalities
-(contacts, saturated actuators: a QP node in the graph, which CVODES cannot differentiate) runs with DOP853
-from the start.
+(bounded actuators: a QP node in the graph) runs in CVODES with Adams' functional iteration, which needs no
+Jacobian; BDF, which differentiates the right-hand side, hands it to DOP853 from the start.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from ..model.model import Model
 from ..step.general import general_step
 from ..step.general.solve import CONSISTENCY_TOL
 from . import methods as _methods
-from .compiled import cvodes_run
+from .compiled import CVODES, cvodes_run
 from .drift import Stabilization
 from .inputs import Options
 from .integrate import run_scipy
@@ -32,15 +32,19 @@ from .samples import Samples
 CONTINUATION = "DOP853"
 
 
-def _rhs_function(model: Model, rhs: GeneralRightHandSide, t0: float, y0: np.ndarray) -> ca.Function | None:
+def _rhs_function(
+    model: Model, rhs: GeneralRightHandSide, t0: float, y0: np.ndarray, differentiated: bool
+) -> ca.Function | None:
     """``F(t, y, stab) → y'`` of the pattern decided at ``(t0, y0)``, NaN where its flag is down; ``None`` when
-    the pattern's step is not one SX function."""
+    there is none, or when the method ``differentiated`` it (BDF's Newton iteration) and it holds a QP node."""
     rhs.evaluate(t0, y0)  # the Python route decides the pattern at the start (or its compiled call answers)
     call = general_step.current_call(model, rhs.backend, None, CONSISTENCY_TOL)
-    if call is None or not call.function.is_a("SXFunction"):
+    flat = call is not None and call.function.is_a("SXFunction")
+    if call is None or (differentiated and not flat):
         return None
     nq, nv, nl = model.nq, model.nv, model.n_lam
-    t, y, s = ca.SX.sym("t"), ca.SX.sym("y", nq + nv + nl + 2), ca.SX.sym("stab", 2)
+    sym = ca.SX.sym if flat else ca.MX.sym
+    t, y, s = sym("t"), sym("y", nq + nv + nl + 2), sym("stab", 2)
     out = call.function(t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], s)
     sl = call.slices
     u = out[sl["u"].start : sl["u"].start + model.m]
@@ -60,7 +64,7 @@ def run_general_cvodes(
 ) -> Samples:
     """CVODES on the compiled general step, then DOP853 from where it stopped (module docstring)."""
     o = opts
-    F = _rhs_function(model, rhs, o.t0, y0)
+    F = _rhs_function(model, rhs, o.t0, y0, differentiated=CVODES[o.method.name] == "bdf")
     continuation = replace(o, method=_methods.get(CONTINUATION), dt=None)
     if F is None:
         return run_scipy(rhs, continuation, y0)
