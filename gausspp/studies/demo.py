@@ -199,10 +199,10 @@ def scene_rows() -> Iterator[SceneRow]:
 
 
 def backends() -> Backends:
-    """The default qpsolvers backend (daqp when installed, else OSQP) and one to compare it with: ProxQP when
-    installed (a proximal augmented Lagrangian method against daqp's active set, and as fast here), else OSQP —
-    none when that is the default itself. (OSQP at the tolerances of these rows costs 2.4 × daqp: measured on the
-    saturated crane, 4.7 s against 2.0 s, ProxQP 2.0 s.)"""
+    """The general QP's default backend (casadi's qrqp, compiled into the step) and one to compare it with: ProxQP
+    when installed (a proximal augmented Lagrangian method against an active set), else OSQP — none when that is
+    the default itself. (OSQP at the tolerances of these rows cost 2.4 × daqp: measured on the saturated crane,
+    4.7 s against 2.0 s, ProxQP 2.0 s, before the general step was compiled.)"""
     first = general_step.default_backend()
     second = "proxqp" if "proxqp" in qpsolvers_route.available() else "osqp"
     return Backends(first, None if first in ("osqp", second) else second)

@@ -127,6 +127,6 @@ def general_lines(backends: Backends, rows: Iterable[GeneralRow]) -> Iterator[st
         "actuator at its bound;"
     )
     if second:
-        yield f"{versus}: largest difference of q on a common grid of 201 times (the two qpsolvers backends run here)."
+        yield f"{versus}: largest difference of q on a common grid of 201 times (the two QP backends run here)."
     else:
         yield f"only {first} was run: daqp not installed — `pip install daqp` to compare two QP backends."
