@@ -58,7 +58,8 @@ from .stage import DUAL_TOL, FEASIBILITY_TOL
 #: The kept rows' Cholesky pivots of ``S Sᵀ`` must be at least this times the squared ones of their Gram matrix
 #: ``Jn Jnᵀ`` (what the ideal realization would give): below it, the Python route judges realizability.
 REALIZABLE_PIVOT = 1e-6
-#: Kept rows stay kept on the hot path while their sines against the rows kept before them exceed this: the
+#: Kept rows stay kept on the hot path while their sines against the rows kept before them exceed this — zero:
+#: only a failed factorization (NaN, the rows dependent to round-off) hands the state to the Python route. The
 #: decision of an open piece of the manifold holds through an isolated singular position (a parallelogram's
 #: collinear one), where only the instantaneous rank drops; the step there stays on the branch of the motion.
 KEPT_FLOOR = 0.0
