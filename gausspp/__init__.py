@@ -12,6 +12,7 @@ import sys
 
 from . import plot, scenes, servo
 from .errors import (
+    DriftError,
     GaussppError,
     GaussppWarning,
     InitialDataError,
@@ -67,6 +68,7 @@ __all__ = [
     "from_sympy",
     "GaussppError",
     "GaussppWarning",
+    "DriftError",
     "Holonomic",
     "Ideal",
     "Inertial",

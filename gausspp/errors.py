@@ -60,7 +60,9 @@ class RealizabilityError(GaussppError):
     most involved and the margin.
     """
 
-    def __init__(self, message: str, *, t: float, constraint: str, margin: float) -> None:
+    def __init__(
+        self, message: str, *, t: float = float("nan"), constraint: str = "", margin: float = float("nan")
+    ) -> None:
         super().__init__(message)
         self.t = t
         self.constraint = constraint
@@ -73,6 +75,21 @@ class QPSolveError(GaussppError):
 
 class IntegrationError(GaussppError):
     """The time integrator could not continue (step size underflow, too many steps)."""
+
+
+class DriftError(IntegrationError):
+    """The recorded motion left its constraints by more than the run's ``constraint_tol``.
+
+    A step that answered at every state can still carry the motion off the manifold: a fixed step too long for
+    the motion, or a step across a singular position onto a state the constraints no longer hold. Attributes
+    give the first time and the row.
+    """
+
+    def __init__(
+        self, message: str, *, t: float = float("nan"), constraint: str = "", residual: float = float("nan")
+    ) -> None:
+        super().__init__(message)
+        self.t, self.constraint, self.residual = t, constraint, residual
 
 
 class FrozenModelError(GaussppError, AttributeError):

@@ -26,8 +26,8 @@ def samples_of(model, traj):
 
 
 def both(model, samples, solver):
-    at_once = recording.record_smooth(model, RightHandSide(model, solver, None, Stabilization()), samples)
-    one_by_one = recording.record_smooth(model, OneByOne(model, solver, None, Stabilization()), samples)
+    at_once = recording.record_smooth(model, RightHandSide(model, solver, None, Stabilization()), samples, 1e-3)
+    one_by_one = recording.record_smooth(model, OneByOne(model, solver, None, Stabilization()), samples, 1e-3)
     return at_once, one_by_one
 
 

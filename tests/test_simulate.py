@@ -91,7 +91,8 @@ def circle_particle() -> gp.Model:
 
 def test_baumgarte_and_projection_control_drift() -> None:
     model = circle_particle()
-    kwargs = dict(dt=0.01, method="symplectic-euler", solver="direct")
+    # a first-order method at a coarse step: the drift is the figure compared (1e-3 in Φ even with Baumgarte)
+    kwargs = dict(dt=0.01, method="symplectic-euler", solver="direct", drift_tol=1.0)
     raw = gp.simulate(model, [1.0, 0.0], [0.0, 0.0], 5.0, **kwargs)
     baum = gp.simulate(model, [1.0, 0.0], [0.0, 0.0], 5.0, stabilize=gp.Baumgarte.critical(0.05), **kwargs)
     proj = gp.simulate(model, [1.0, 0.0], [0.0, 0.0], 5.0, stabilize="project", **kwargs)

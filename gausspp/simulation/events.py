@@ -92,7 +92,7 @@ def run_contacts(model: Model, q0: Any, v0: Any, lam0: Any, stabilize: Any, opts
             "< 0; start with every gap g ≥ 0"
         )
     samples = EventRun(model, opts, stab, np.concatenate([q, v, lam, [0.0, 0.0]])).samples()
-    return recording.finish(recording.record_contacts(model, samples), samples.failure, opts.throw)
+    return recording.finish(recording.record_contacts(model, samples, opts.drift_tol), samples.failure, opts.throw)
 
 
 class EventRun:

@@ -45,6 +45,9 @@ class Options:
     throw: bool
     rest_speed: float
     max_events: int
+    #: The run's residuals ``|g|, |Φ|`` may not exceed this relative to ``1 + ‖q‖∞``, ``1 + ‖v‖∞``
+    #: (:mod:`gausspp.simulation.residual_audit`).
+    drift_tol: float = 1e-3
     #: The lanes that can run the method with these options, fastest first (:func:`lanes.check_solver`).
     lanes: tuple[lanes.Lane, ...] = ()
 
@@ -65,6 +68,7 @@ def check_options(  # the arguments of gp.simulate, in its order
     rest_speed: Any,
     max_events: Any,
     lane: str | None = None,
+    drift_tol: Any = 1e-3,
 ) -> Options:
     """Every argument of a run that does not need the state, checked; the errors name the argument and the fix."""
     if not isinstance(model, Model):
@@ -81,6 +85,7 @@ def check_options(  # the arguments of gp.simulate, in its order
     rtol = positive("rtol", rtol, hint=" (the relative tolerance of adaptive methods, e.g. rtol=1e-9)")
     atol = positive("atol", atol, zero_ok=True, hint=" (the absolute tolerance of adaptive methods, e.g. atol=1e-12)")
     constraint_tol = positive("constraint_tol", constraint_tol, zero_ok=True)
+    drift_tol = positive("drift_tol", drift_tol, hint=" (the drift a run may take, relative: e.g. drift_tol=1e-3)")
     rest_speed = positive("rest_speed", rest_speed, zero_ok=True)
     max_events = positive("max_events", max_events, integer=True)
     if not isinstance(throw, (bool, np.bool_)):
@@ -103,6 +108,7 @@ def check_options(  # the arguments of gp.simulate, in its order
         bool(throw),
         rest_speed,
         max_events,
+        drift_tol,
         among,
     )
 

@@ -19,12 +19,20 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..errors import GaussppError, IntegrationError, NonFiniteError, RealizabilityError, RealizabilityWarning
+from ..errors import (
+    DriftError,
+    GaussppError,
+    IntegrationError,
+    NonFiniteError,
+    RealizabilityError,
+    RealizabilityWarning,
+)
 from ..model.model import Model
 from ..step.realizability import stacked_margins
 from .contacts import gaps, phase_step
 from .labels import model_labels
 from .margins import SMALL_MARGIN, audit
+from .residual_audit import residual_audit
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
 from .trajectory import Trajectory
@@ -99,8 +107,9 @@ class Columns:
         return np.concatenate([known, rest])
 
 
-def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples) -> Recorded:
-    """The trajectory of a smooth run, its margin audited; samples past a lost margin are dropped."""
+def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples, tol: float) -> Recorded:
+    """The trajectory of a smooth run, its margin and its residuals (to ``tol``) audited; samples past a lost
+    margin or the first beyond ``tol`` are dropped."""
     y = samples.y.copy()
     # adaptive lanes integrate q freely: bring the samples back onto the manifold (unit quaternions)
     y[:, : model.nq] = model.mechanism.normalize_array(y[:, : model.nq])
@@ -120,11 +129,13 @@ def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples) -> Reco
     failure = _fill(cols, evaluate, cols.kept)
     margin = cols.margin(known)
     kept, failure, notes = audit(model, rhs, samples.t[: cols.kept], y, cols.S[: cols.kept], margin, failure)
+    kept, failure = _within(model, samples.t, y, cols, tol, kept, failure)
     return _trajectory(model, samples, cols, margin, kept), failure, notes
 
 
-def record_contacts(model: Model, samples: Samples) -> Recorded:
-    """The trajectory of an event-driven run: each sample by the model of its phase, with the contact gaps."""
+def record_contacts(model: Model, samples: Samples, tol: float) -> Recorded:
+    """The trajectory of an event-driven run: each sample by the model of its phase, with the contact gaps; its
+    residuals audited to ``tol``."""
     assert samples.active is not None  # an event-driven run names each sample's phase
     active_of = samples.active
     nq, nv, nl = model.nq, model.nv, model.n_lam
@@ -137,7 +148,19 @@ def record_contacts(model: Model, samples: Samples) -> Recorded:
 
     cols = Columns(model, samples.t.size, False)
     failure = _fill(cols, evaluate, 0)
-    return _trajectory(model, samples, cols, cols.margin(), cols.kept), failure, []
+    kept, failure = _within(model, samples.t, samples.y, cols, tol, cols.kept, failure)
+    return _trajectory(model, samples, cols, cols.margin(), kept), failure, []
+
+
+def _within(
+    model: Model, t: np.ndarray, y: np.ndarray, cols: Columns, tol: float, kept: int, failure: Exception | None
+) -> tuple[int, Exception | None]:
+    """The samples to keep and the failure once the residuals are audited (:mod:`.residual_audit`): a departure
+    from the constraint explains any failure found after it."""
+    n, drift = residual_audit(model, t, y, cols.g, cols.residual, tol, kept)
+    if drift is None or (failure is not None and n >= kept):
+        return kept, failure
+    return n, drift
 
 
 def _fill(cols: Columns, evaluate: Evaluate, start: int) -> Exception | None:
@@ -203,7 +226,8 @@ def finish(recorded: Recorded, run_failure: Exception | None, throw: bool) -> Tr
     traj, record_failure, notes = recorded
     for note in notes:
         warnings.warn(note, RealizabilityWarning, stacklevel=3)
-    failure = record_failure if isinstance(record_failure, RealizabilityError) else run_failure or record_failure
+    explains = isinstance(record_failure, (RealizabilityError, DriftError))  # found at a sample before the run's
+    failure = record_failure if explains else run_failure or record_failure
     if failure is None:
         return traj
     traj = failed(traj, failure)

@@ -56,6 +56,7 @@ def simulate(
     rest_speed: float = 1e-6,
     max_events: int = 10_000,
     lane: str | None = None,
+    drift_tol: float = 1e-3,
 ) -> Trajectory:
     """Integrate ``model`` from ``(q0, v0)`` at ``t0`` to ``t_end``.
 
@@ -93,6 +94,12 @@ def simulate(
     rest_speed, max_events :
         Unilateral contacts only (:mod:`gausspp.simulation.contacts`): an impact that would leave a contact
         slower than ``rest_speed`` ends in rest; a run with more than ``max_events`` events stops.
+    drift_tol : float
+        How far the motion may leave its constraints before the run counts as failed: a sample with
+        ``|g_i| > drift_tol·(1 + ‖q‖∞)`` or ``|Φ_i| > drift_tol·(1 + ‖v‖∞)`` ends the run with a
+        :class:`~gausspp.DriftError` (a step too long for the motion, a step across a singular position off the
+        branch). Rows of a model with bounded actuators are not checked (a saturated actuator falls short of its
+        constraint: ``Trajectory.tracking_error``).
     lane : str, optional
         Run in this lane of :data:`gausspp.simulation.lanes.LANES` (``"python"``, ``"compiled"``,
         ``"scipy"``, ``"cvodes"``, ``"events"``) instead of the fastest that can; e.g. ``method="rk4",
@@ -118,6 +125,7 @@ def simulate(
         rest_speed,
         max_events,
         lane,
+        drift_tol,
     )
     if model.contacts:
         return _labelled("events", model.route, lambda: run_contacts(model, q0, v0, lam0, stabilize, opts))
@@ -135,7 +143,9 @@ def simulate(
         lambda: _labelled(
             chosen.name,
             model.route,
-            lambda: recording.finish(recording.record_smooth(model, rhs, samples), samples.failure, opts.throw),
+            lambda: recording.finish(
+                recording.record_smooth(model, rhs, samples, opts.drift_tol), samples.failure, opts.throw
+            ),
         ),
     )
 
