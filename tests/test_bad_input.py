@@ -561,7 +561,7 @@ ROWS = [
             gp.sweeps.realizability_task, grid(lon=[0.0], lat=[0.0]), executor="serial", out="/", progress=False
         ),
         gp.sweeps.SweepError,
-        r"cannot read out='/'",
+        r"out='/': '/' is a directory; give a file name",
     ),
     row(
         "sweep executor a number",

@@ -82,6 +82,11 @@ def check_options(  # the arguments of gp.simulate, in its order
         raise InputError(f"method {meth.name!r} has a fixed step: give dt > 0, e.g. dt={(t_end - t0) / 1000:.3g}")
     if dt is not None:
         dt = positive("dt", dt, hint=" (the step; for adaptive methods the first and largest)")
+        if dt > t_end - t0:
+            raise InputError(
+                f"dt={dt:g} is longer than the run (t_end - t0 = {t_end - t0:g}): give dt ≤ {t_end - t0:g}, e.g. "
+                f"dt={(t_end - t0) / 1000:.3g}"
+            )
     rtol = positive("rtol", rtol, hint=" (the relative tolerance of adaptive methods, e.g. rtol=1e-9)")
     atol = positive("atol", atol, zero_ok=True, hint=" (the absolute tolerance of adaptive methods, e.g. atol=1e-12)")
     constraint_tol = positive("constraint_tol", constraint_tol, zero_ok=True)
@@ -123,6 +128,13 @@ def check_record(record: Any, t0: float, t_end: float) -> Any:
     if times.min() < t0 or times.max() > t_end:
         raise InputError(
             f"record times must lie within [t0, t_end] = [{t0:g}, {t_end:g}], got {times.min():g} … {times.max():g}"
+        )
+    back = np.flatnonzero(np.diff(times) <= 0)
+    if back.size:
+        i = int(back[0])
+        raise InputError(
+            f"record times must increase, got record[{i}] = {times[i]:g} then record[{i + 1}] = {times[i + 1]:g}: "
+            "sort them (np.unique(record) sorts and drops repeats)"
         )
     return times
 

@@ -106,21 +106,75 @@ def to_pandas(traj: Any) -> Any:
     return frame
 
 
-def save(traj: Any, path: str | os.PathLike[str], attrs: dict[str, Any] | None = None) -> Path:
+def save(traj: Any, path: str | os.PathLike[str], attrs: dict[str, Any] | None = None, overwrite: bool = False) -> Path:
     """Write ``traj`` to ``path``: ``.npz`` (numpy only) or ``.nc`` (netCDF through xarray), by its suffix;
-    ``attrs`` (strings and numbers) are stored beside the settings. Returns the path."""
+    ``attrs`` (strings and numbers) are stored beside the settings. Returns the path.
+
+    The file is written under a temporary name beside ``path`` and then renamed, so that a failure leaves no half
+    file and an existing file is either replaced whole or untouched. A file already at ``path`` is replaced only if
+    it is a trajectory written here, or with ``overwrite=True``."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in (".npz", ".nc"):
         raise InputError(f"path={str(path)!r}: a trajectory is saved as .npz or .nc (netCDF): use one of those")
+    if not isinstance(overwrite, (bool, np.bool_)):
+        raise InputError(f"overwrite must be True or False, got {overwrite!r}")
+    attrs = _checked_attrs(traj, attrs)
+    if suffix == ".nc" and len(traj.t) == 0:
+        raise InputError(f"path={str(path)!r}: an empty trajectory cannot be written as netCDF; use a .npz file")
+    if path.is_dir():
+        raise InputError(f"path={str(path)!r} is a directory: give a file name ending in {suffix}")
+    if path.exists() and not overwrite and not is_trajectory_file(path):
+        raise InputError(
+            f"path={str(path)!r} exists and is not a trajectory written by Trajectory.save: choose another name, "
+            "or pass overwrite=True to replace it"
+        )
+    partial = path.with_name(f".{path.name}.{os.getpid()}.part")
     try:
         if suffix == ".npz":
-            _save_npz(traj, path, attrs or {})
+            _save_npz(traj, partial, attrs)
         else:
-            _save_nc(traj, path, attrs or {})
+            _save_nc(traj, partial, attrs)
+        os.replace(partial, path)
     except OSError as exc:
         raise GaussppError(f"cannot write {str(path)!r}: {exc.strerror or exc}") from exc
+    finally:
+        partial.unlink(missing_ok=True)
     return path
+
+
+def _checked_attrs(traj: Any, attrs: Any) -> dict[str, Any]:
+    """``attrs`` as stored: string keys that name none of the stored arrays and settings, values that are strings
+    or finite numbers (what both formats keep and read back)."""
+    if attrs is None:
+        return {}
+    if not isinstance(attrs, dict):
+        raise InputError(f"attrs must be a dict of names to strings or numbers, got {type(attrs).__name__}")
+    taken = {"t", "energy_balance", *DIMS, *settings(traj), *(_LABEL_KEY + axis for axis in Labels().as_dict())}
+    for key, value in attrs.items():
+        if not isinstance(key, str) or not key.isidentifier():
+            raise InputError(f"attrs key {key!r} must be a name (letters, digits, underscores)")
+        if key in taken:
+            raise InputError(f"attrs key {key!r} is the name of a stored field or setting; choose another name")
+        plain = isinstance(value, str) or (
+            isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+        )
+        if not plain or (not isinstance(value, str) and not np.isfinite(value)):
+            raise InputError(f"attrs[{key!r}] = {value!r}: a stored attribute is a string or a finite number")
+    return dict(attrs)
+
+
+def is_trajectory_file(path: Path) -> bool:
+    """Whether ``path`` holds a trajectory written by :func:`save` (its format mark), without raising."""
+    try:
+        if path.suffix.lower() == ".nc":
+            xr = require("xarray")
+            with xr.open_dataset(path) as ds:
+                return bool(ds.attrs.get("format") == FORMAT)
+        with np.load(path, allow_pickle=False) as data:
+            return bool("format" in data.files and str(data["format"]) == FORMAT)
+    except Exception:  # noqa: BLE001 — any file that does not read as one is not one
+        return False
 
 
 def _save_npz(traj: Any, path: Path, attrs: dict[str, Any]) -> None:
@@ -128,13 +182,12 @@ def _save_npz(traj: Any, path: Path, attrs: dict[str, Any]) -> None:
     labels = {_LABEL_KEY + axis: np.asarray(names, dtype=str) for axis, names in traj.labels.as_dict().items()}
     fields = {key: np.asarray(getattr(traj, key)) for key in ("t", *DIMS)}
     stored: dict[str, Any] = {"energy_balance": energy_balance(traj), **fields, **labels, **settings(traj), **attrs}
-    np.savez(path, **stored)
+    with open(path, "wb") as fh:  # a handle: numpy would append ".npz" to a name ending in ".NPZ"
+        np.savez(fh, **stored)
 
 
 def _save_nc(traj: Any, path: Path, attrs: dict[str, Any]) -> None:
     """The dataset of :func:`to_xarray` without its zero-width axes (netCDF 3 cannot hold them)."""
-    if len(traj.t) == 0:
-        raise InputError(f"path={str(path)!r}: an empty trajectory cannot be written as netCDF; use a .npz file")
     ds = to_xarray(traj, attrs)
     empty = [dim for dim, size in ds.sizes.items() if size == 0]
     ds.drop_dims(empty).to_netcdf(path)
@@ -148,16 +201,33 @@ def read(path: str | os.PathLike[str], fields: Collection[str]) -> dict[str, Any
     if path.suffix.lower() == ".nc":
         return _read_nc(path, fields)
     try:
-        with np.load(path, allow_pickle=False) as data:
+        loaded = np.load(path, allow_pickle=False)
+        if not isinstance(loaded, np.lib.npyio.NpzFile):
+            raise ValueError("it holds a single array (.npy), not an archive of arrays")
+        with loaded as data:
             stored = {key: data[key] for key in data.files}
-    except (OSError, ValueError) as exc:
-        raise InputError(f"path={str(path)!r} is not a trajectory file written by Trajectory.save: {exc}") from None
+    except Exception as exc:  # noqa: BLE001 — truncated, empty, not a zip, a .npy array, pickled objects …
+        raise InputError(
+            f"path={str(path)!r} is not a readable trajectory file written by Trajectory.save: {_why(exc)}"
+        ) from None
     if str(stored.get("format", "")) != FORMAT:
         raise InputError(f"path={str(path)!r} is not a trajectory written by Trajectory.save (no format {FORMAT!r})")
     axes = Labels().as_dict()
     labels = {axis: tuple(str(s) for s in stored.get(_LABEL_KEY + axis, ())) for axis in axes}
     out = {key: value for key, value in stored.items() if key in fields and key in DIMS or key == "t"}
     return {**out, **_settings_back(stored, fields), "labels": Labels(**labels)}
+
+
+def _why(exc: Exception) -> str:
+    """What is wrong with a file numpy could not read, in a user's words."""
+    text = str(exc)
+    if "pickle" in text:
+        return "it holds Python objects, which a saved trajectory never does"
+    if isinstance(exc, EOFError) or "No data left" in text:
+        return "it is empty"
+    if "zip" in text.lower():
+        return "it is not a numpy archive (truncated, or another kind of file)"
+    return text or type(exc).__name__
 
 
 def _settings_back(attrs: Any, fields: Collection[str]) -> dict[str, Any]:
@@ -175,7 +245,13 @@ def _settings_back(attrs: Any, fields: Collection[str]) -> dict[str, Any]:
 def _read_nc(path: Path, fields: Collection[str]) -> dict[str, Any]:
     """The fields of a netCDF file written by :func:`save`; axes dropped for being empty come back ``(N, 0)``."""
     xr = require("xarray")
-    ds = xr.load_dataset(path)
+    try:
+        ds = xr.load_dataset(path)
+    except Exception:  # noqa: BLE001 — not netCDF, truncated, no engine can read it
+        raise InputError(
+            f"path={str(path)!r} is not a readable netCDF trajectory written by Trajectory.save: no netCDF reader "
+            "recognizes it (not netCDF, or truncated)"
+        ) from None
     if ds.attrs.get("format") != FORMAT:
         raise InputError(f"path={str(path)!r} is not a trajectory written by Trajectory.save (no format {FORMAT!r})")
     n = ds.sizes["time"]

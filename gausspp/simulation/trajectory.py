@@ -144,11 +144,13 @@ class Trajectory:
         (needs ``pip install 'gausspp[data]'``)."""
         return labelled.to_pandas(self)
 
-    def save(self, path: str | os.PathLike[str], attrs: dict[str, Any] | None = None) -> Path:
+    def save(self, path: str | os.PathLike[str], attrs: dict[str, Any] | None = None, overwrite: bool = False) -> Path:
         """Write the trajectory to ``path``: ``.npz`` (numpy only) or ``.nc`` (netCDF, needs
         ``gausspp[data]``), chosen by the suffix; ``attrs`` (strings, numbers) are stored too.
-        :func:`load_trajectory` reads it back, so that the run can be verified later (:func:`gausspp.verify`)."""
-        return labelled.save(self, path, attrs)
+        :func:`load_trajectory` reads it back, so that the run can be verified later (:func:`gausspp.verify`).
+        Written whole or not at all (a temporary name, then renamed); a file at ``path`` that is not a saved
+        trajectory is replaced only with ``overwrite=True``."""
+        return labelled.save(self, path, attrs, overwrite)
 
     def __len__(self) -> int:
         return int(self.t.size)

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import plot, scenes
 from ..errors import GaussppError
-from ..simulation.labelled import energy_balance
+from ..simulation.labelled import energy_balance, is_trajectory_file
 from ..simulation.trajectory import Trajectory
 from .tables import label
 
@@ -39,6 +39,48 @@ def columns(traj: Trajectory) -> tuple[list[str], np.ndarray]:
 FILE_SUFFIXES = (".npz", ".nc")
 #: The suffixes that make ``--out`` the figure of ``q(t)`` and ``v(t)`` alone.
 FIGURE_SUFFIXES = (".png", ".svg", ".pdf")
+
+
+def check_out(out: Path, scene_name: str) -> None:
+    """Refuse, before the run, an ``out`` the trajectory cannot be written to without changing a file that is not
+    gausspp's output: a file where a directory is meant, a directory where a file is meant, an existing
+    ``.npz``/``.nc`` that is not a saved trajectory, an existing CSV that is not one written here."""
+    suffix = out.suffix.lower()
+    if suffix in FIGURE_SUFFIXES:
+        if out.is_dir():
+            raise GaussppError(f"--out {str(out)!r} is a directory, not a figure file")
+        if out.parent.exists() and not out.parent.is_dir():
+            raise GaussppError(f"--out {str(out)!r}: {str(out.parent)!r} is a file, not a directory")
+        return
+    if suffix in FILE_SUFFIXES:
+        targets = [out]
+    elif out.exists() and not out.is_dir():
+        raise GaussppError(f"--out {str(out)!r} is a file: give a directory (or a .npz, .nc or figure file name)")
+    else:
+        targets = [out / f"{scene_name}.npz", out / f"{scene_name}.csv"]
+    for parent in out.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise GaussppError(f"--out {str(out)!r}: {str(parent)!r} is a file, not a directory")
+            break
+    for target in targets:
+        if target.is_dir():
+            raise GaussppError(f"--out {str(out)!r}: {str(target)!r} is a directory")
+        ours = _is_our_csv(target) if target.suffix == ".csv" else is_trajectory_file(target)
+        if target.exists() and not ours:
+            raise GaussppError(
+                f"--out {str(out)!r}: {str(target)!r} exists and is not gausspp's output; choose another --out, or "
+                "move that file"
+            )
+
+
+def _is_our_csv(path: Path) -> bool:
+    """A CSV written by :func:`write_trajectory` (its header starts with the time and the coordinates)."""
+    try:
+        with path.open(encoding="utf-8") as fh:
+            return fh.readline().startswith("t,q1")
+    except (OSError, UnicodeDecodeError):
+        return False
 
 
 def write_trajectory(traj: Trajectory, scene: scenes.Scene, params: dict[str, Any], out: Path) -> list[Path]:

@@ -16,7 +16,7 @@ from typing import Any, TextIO
 
 from ..errors import SweepLogWarning
 from .sweep_engine import Progress
-from .sweep_result import SweepError, canonical_json
+from .sweep_result import SweepError, canonical_json, is_sweep_npz
 
 __all__ = ["Collector", "log_paths", "open_log", "resume"]
 
@@ -29,8 +29,36 @@ def log_paths(out: str | os.PathLike[str] | None) -> tuple[Path | None, Path | N
     if path.suffix.lower() in (".parquet", ".pq"):
         raise SweepError(f"out={str(path)!r}: Parquet is not supported (it needs pyarrow); use a .npz or .jsonl file")
     if path.suffix.lower() == ".npz":
-        return path.with_suffix(".jsonl"), path
-    return path, None
+        log, npz = path.with_suffix(".jsonl"), path
+    else:
+        log, npz = path, None
+    for target, is_ours in ((log, _is_sweep_log), (npz, is_sweep_npz)):
+        if target is not None and target.is_dir():
+            raise SweepError(f"out={str(out)!r}: {str(target)!r} is a directory; give a file name (.jsonl or .npz)")
+        if target is not None and target.exists() and not is_ours(target):
+            raise SweepError(
+                f"out={str(out)!r}: {str(target)!r} exists and is not a sweep's output; a sweep never writes over "
+                "another file — choose another out, or move that file"
+            )
+    return log, npz
+
+
+def _is_sweep_log(path: Path) -> bool:
+    """An empty file, or one whose first line names a sweep's task (what :func:`open_log` writes)."""
+    if path.is_dir():
+        return False
+    try:
+        with path.open(encoding="utf-8") as fh:
+            first = fh.readline()
+    except (OSError, UnicodeDecodeError):
+        return False
+    if not first.strip():
+        return path.stat().st_size == 0
+    try:
+        head = json.loads(first)
+    except ValueError:
+        return False
+    return isinstance(head, dict) and "task" in head and "index" not in head
 
 
 def resume(

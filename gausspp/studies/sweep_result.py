@@ -151,16 +151,22 @@ class SweepResult:
         return len(self.params)
 
     # -- NPZ --------------------------------------------------------------------------------------------
-    def to_npz(self, path: str | os.PathLike[str]) -> Path:
+    def to_npz(self, path: str | os.PathLike[str], overwrite: bool = False) -> Path:
         """Write the sweep as NPZ columns, one array per parameter and per result key.
 
         Arrays: ``index``; ``ok`` (bool) and ``error`` (the error text, ``""`` where the task succeeded);
         ``params.<key>`` and ``results.<key>`` for every key — int or bool where complete, float with NaN
         where a task lacks the value or failed, ``(N, *shape)`` for lists of one shape, str for strings, the
         JSON text otherwise; ``record`` (the whole sweep as JSON, for :meth:`from_npz`). Loads with
-        ``numpy.load(path)`` (no pickle).
+        ``numpy.load(path)`` (no pickle). Written whole or not at all (a temporary name, then renamed); a file at
+        ``path`` that is not a sweep written here is replaced only with ``overwrite=True``.
         """
         target = Path(path)
+        if target.exists() and not overwrite and not is_sweep_npz(target):
+            raise SweepError(
+                f"{str(target)!r} exists and is not a sweep written by SweepResult.to_npz: choose another name, or "
+                "pass overwrite=True to replace it"
+            )
         arrays: dict[str, np.ndarray] = {
             "index": np.arange(len(self), dtype=np.int64),
             "ok": np.array([i not in self.errors for i in range(len(self))], dtype=bool),
@@ -180,12 +186,16 @@ class SweepResult:
             "computed": self.computed,
         }
         arrays["record"] = np.array(canonical_json(record, "the sweep"))
+        partial = target.with_name(f".{target.name}.{os.getpid()}.part")  # whole or not at all
         try:
             target.parent.mkdir(parents=True, exist_ok=True)
-            with target.open("wb") as fh:
+            with partial.open("wb") as fh:
                 np.savez_compressed(fh, **arrays)  # type: ignore[arg-type]
+            os.replace(partial, target)
         except OSError as exc:
             raise SweepError(f"cannot write {str(target)!r}: {exc}") from None
+        finally:
+            partial.unlink(missing_ok=True)
         return target
 
     @classmethod
@@ -206,3 +216,12 @@ class SweepResult:
             wall_time=float(rec["wall_time"]),
             computed=int(rec["computed"]),
         )
+
+
+def is_sweep_npz(path: Path) -> bool:
+    """Whether ``path`` holds a sweep written by :meth:`SweepResult.to_npz` (its ``record`` and ``index``)."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return "record" in data.files and "index" in data.files
+    except Exception:  # noqa: BLE001 — anything numpy cannot read as an archive is not one
+        return False
