@@ -9,11 +9,13 @@ Prints, measured in one run on this machine:
   crane over 3 s, the block dropped on the floor over 3 s, the double parallelogram through its first collinear
   position — beside MuJoCo's four-bar (``connect``, RK4, dt = 1e-3, stiffest settings) and box drop when the
   peers extra is installed (``benchmarks/_mujoco_peers.py``);
-* the ladder of double-parallelogram cells: ``model.step`` for N = 2, 4, 8 and its growth exponent, beside
-  MuJoCo's parallelogram ladder (its cells without the third bar: MuJoCo's soft ``connect`` rows need none).
+* the ladder of double-parallelogram cells: ``model.step`` for N = 4 … 64 and its growth exponent, the first
+  step's time (the Python route decides, the pattern compiles), beside MuJoCo's parallelogram ladder (its cells
+  without the third bar: MuJoCo's soft ``connect`` rows need none).
 
 ``--before REV`` runs the same measurements on the package as it was at git revision ``REV`` (a temporary
-worktree, in a second process) and prints both columns. Each time is the best of repeats (noise only adds
+worktree, in a second process; its ladder only up to ``--before-ladder``, default N = 8: before the sparse route
+the build grew as N³, 150 s at N = 16) and prints both columns. Each time is the best of repeats (noise only adds
 time); the machine is shared, so compare ratios taken in one run.
 """
 
@@ -35,8 +37,8 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
-#: Ladder sizes: the compiled general step is dense (its build grows as N³: 15 s at N = 8, 150 s at N = 16).
-LADDER = (2, 4, 8)
+#: Ladder sizes (the issue's range: N = 4 … 64).
+LADDER = (4, 8, 16, 32, 64)
 
 
 def _best_us(fn: Any, repeats: int = 5, n: int = 200) -> float:
@@ -60,7 +62,7 @@ def _best_ms(fn: Any, repeats: int = 3) -> float:
     return best * 1e3
 
 
-def measure() -> dict[str, float]:
+def measure(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
     """Every figure of this package (the one on ``sys.path``), by name."""
     import gausspp as gp
     from gausspp import scenes
@@ -116,17 +118,19 @@ def measure() -> dict[str, float]:
             lambda: gp.simulate(double.model, double.q0, double.v0, 1.0, method="cvodes-adams", rtol=1e-10,
                                 atol=1e-10), 2)  # fmt: skip
         out["  error vs one-DOF reference (m)"] = float(np.abs(run.q - qref).max())
-        for n in LADDER:
+        for n in ladder_sizes:
             ladder = scenes.get("parallelogram", cells=n, third_bar=True)
             m = ladder.model
+            start = time.perf_counter()
             m.step(0.0, ladder.q0, ladder.v0)
+            out[f"first step ladder N={n} (s)"] = time.perf_counter() - start
             out[f"step ladder N={n}"] = _best_us(lambda m=m, s=ladder: m.step(0.0, s.q0, s.v0), n=20)
     except Exception as exc:  # a scene this revision does not have
         print(f"(parallelogram rows skipped: {type(exc).__name__}: {exc})", file=sys.stderr)
     return out
 
 
-def peers() -> dict[str, float]:
+def peers(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
     """MuJoCo's figures (empty without the peers extra)."""
     try:
         import _mujoco_peers as mj
@@ -136,12 +140,12 @@ def peers() -> dict[str, float]:
         return {}
     out = {"MuJoCo four-bar 2 s, RK4 dt 1e-3 (ms)": mj.four_bar()["wall_ms"]}
     out["MuJoCo box drop 3 s (ms)"] = mj.box_drop()["wall_ms"]
-    for n in LADDER:
+    for n in ladder_sizes:
         out[f"MuJoCo parallelogram ladder N={n} (µs/step)"] = mj.parallelogram_ladder(n)["step_us"]
     return out
 
 
-def before(rev: str) -> dict[str, float]:
+def before(rev: str, ladder_sizes: str) -> dict[str, float]:
     """:func:`measure` on the package at ``rev`` (a temporary worktree, a second process)."""
     root = Path(subprocess.check_output(["git", "rev-parse", "--show-toplevel"], cwd=HERE, text=True).strip())
     with tempfile.TemporaryDirectory() as tmp:
@@ -149,7 +153,8 @@ def before(rev: str) -> dict[str, float]:
         subprocess.run(["git", "worktree", "add", "-q", "--detach", str(tree), rev], cwd=root, check=True)
         try:
             env = {**os.environ, "PYTHONPATH": str(tree)}
-            text = subprocess.check_output([sys.executable, __file__, "--json"], env=env, text=True)
+            command = [sys.executable, __file__, "--json", "--ladder", ladder_sizes]
+            text = subprocess.check_output(command, env=env, text=True)
         finally:
             subprocess.run(["git", "worktree", "remove", "--force", str(tree)], cwd=root, check=True)
     return json.loads(text.strip().splitlines()[-1])
@@ -163,13 +168,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--before", metavar="REV", help="also measure the package at this git revision")
     parser.add_argument("--json", action="store_true", help="print this package's figures as JSON (internal)")
+    parser.add_argument("--ladder", default=",".join(map(str, LADDER)), help="ladder sizes, e.g. 4,8,16")
+    parser.add_argument("--before-ladder", default="4,8", help="the earlier revision's ladder sizes")
     args = parser.parse_args()
+    sizes = tuple(int(n) for n in args.ladder.split(","))
     if args.json:
-        print(json.dumps(measure()))
+        print(json.dumps(measure(sizes)))
         return
-    now = measure()
-    old = before(args.before) if args.before else {}
-    mj = peers()
+    now = measure(sizes)
+    old = before(args.before, args.before_ladder) if args.before else {}
+    mj = peers(sizes)
     print(f"{'figure':58s} {'now':>12s}" + (f" {'before':>12s}" if old else ""))
     for name, value in now.items():
         print(f"{name:58s} {value:12.4g}" + (f" {old.get(name, float('nan')):12.4g}" if old else ""))
@@ -187,13 +195,15 @@ def main() -> None:
             print(f"  four-bar-redundant whole run / MuJoCo's: {now[key] / mj[list(mj)[0]]:.2f} (≤ 2)")
         box = now["simulate block-on-floor 3 s (ms)"] / mj["MuJoCo box drop 3 s (ms)"]
         print(f"  block-on-floor whole run / MuJoCo's box drop: {box:.2f} (≤ 2)")
-    ladder = [now.get(f"step ladder N={n}") for n in LADDER]
-    if all(ladder):
-        print(f"  ladder step growth N^{_exponent(list(LADDER), ladder):.2f} (issue: ≤ N^1.3 over N = 4 … 64)")  # type: ignore[arg-type]
-        if mj:
-            n = LADDER[-1]
-            ratio = now[f"step ladder N={n}"] / mj[f"MuJoCo parallelogram ladder N={n} (µs/step)"]
-            print(f"  ladder N={n} model.step / MuJoCo's step: {ratio:.2f} (issue: ≤ 2 at N = 32)")
+    ladder = [now.get(f"step ladder N={n}") for n in sizes]
+    if len(sizes) > 1 and all(ladder):
+        growth = _exponent(list(sizes), ladder)  # type: ignore[arg-type]
+        print(f"  ladder step growth N^{growth:.2f} over N = {sizes[0]} … {sizes[-1]} (issue: ≤ N^1.3 over N = 4 … 64)")
+        for n in sizes:
+            key = f"MuJoCo parallelogram ladder N={n} (µs/step)"
+            if key in mj:
+                ratio = now[f"step ladder N={n}"] / mj[key]
+                print(f"  ladder N={n} model.step / MuJoCo's step: {ratio:.2f}" + (" (issue: ≤ 2)" if n == 32 else ""))
 
 
 if __name__ == "__main__":

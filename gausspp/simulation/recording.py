@@ -47,21 +47,23 @@ Evaluate = Callable[[int], tuple[dict[str, np.ndarray], tuple[int, ...], int, in
 class Columns:
     """The per-sample outputs of a run, filled row by row."""
 
-    def __init__(self, model: Model, n: int, general: bool) -> None:
+    def __init__(self, model: Model, n: int, general: bool, keep_S: bool = True) -> None:
         nv, m, k = model.nv, model.m, model.k
-        self.model, self.general, self.kept = model, general, 0
+        #: whether ``S`` is kept (its margin audited): not for redundant rows, whose margin is 0 by design
+        self.model, self.general, self.kept, self.keep_S = model, general, 0, keep_S
         self.a, self.u, self.reaction = np.zeros((n, nv)), np.zeros((n, m)), np.zeros((n, nv))
         self.compulsion, self.energy = np.zeros(n), np.full(n, np.nan)
         self.residual, self.g = np.zeros((n, k)), np.zeros((n, k))
-        self.S = np.zeros((n, k, m))
+        self.S = np.zeros((n, k, m) if keep_S else (n, 0, 0))
         self.contact_force = np.zeros((n, len(model.contact_row_names)))
         self.tracking_error, self.saturated = np.zeros(n), np.zeros((n, m), bool)
 
     def fill(self, i: int, out: dict[str, np.ndarray], active: tuple[int, ...], sub_k: int, sub_m: int) -> None:
         """Row ``i`` from the step outputs ``out`` of a model with ``sub_k`` rows and ``sub_m`` columns whose
         extra rows are the ``active`` contacts."""
-        row = {name: np.asarray(out[name])[None] for name in self.names}
-        row["S_norm"] = np.asarray(out["S_norm"]).reshape(1, sub_k, sub_m)
+        row = {name: np.asarray(out[name])[None] for name in self.names if name != "S_norm" or self.keep_S}
+        if self.keep_S:
+            row["S_norm"] = np.asarray(out["S_norm"]).reshape(1, sub_k, sub_m)
         self.fill_rows(i, row, active)
 
     @property
@@ -88,7 +90,9 @@ class Columns:
             self.contact_force[rows, list(active)] = u[:, m:]
         self.compulsion[rows] = flat("compulsion")[:, 0]
         self.residual[rows], self.g[rows] = flat("Phi")[:, :k], flat("g")[:, :k]
-        if k and start == 0 and n == self.S.shape[0] and out["S_norm"].shape[1:] == (k, m):
+        if not self.keep_S:
+            pass
+        elif k and start == 0 and n == self.S.shape[0] and out["S_norm"].shape[1:] == (k, m):
             self.S = out["S_norm"]  # every sample at once (the smooth runs): taken as it is, not copied
         elif k:
             self.S[rows] = out["S_norm"][:, :k, :m]
@@ -102,6 +106,8 @@ class Columns:
     def margin(self, known: np.ndarray | None = None) -> np.ndarray:
         """The margin ``σ_min`` of each kept sample's normalized ``S``; the first ones may be ``known`` already."""
         known = np.zeros(0) if known is None else known
+        if not self.keep_S:
+            return np.zeros(self.kept)
         model = self.model
         rest = stacked_margins(self.S[known.size : self.kept], model.k, model.m, symmetric=model.symmetric_S or None)
         return np.concatenate([known, rest])
@@ -120,7 +126,7 @@ def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples, tol: fl
     def evaluate(i: int) -> tuple[dict[str, np.ndarray], tuple[int, ...], int, int]:
         return rhs.evaluate(samples.t[i], y[i], stabilized=False), (), model.k, model.m
 
-    cols, known = Columns(model, samples.t.size, general), None
+    cols, known = Columns(model, samples.t.size, general, keep_S=not general or rhs.margin_checked), None
     if isinstance(rhs, RightHandSide):  # the samples that pass all at once, the rest (if any) one by one
         out, margin, good = rhs.evaluate_all(samples.t, y, solutions)
         if good:

@@ -15,8 +15,8 @@ import numpy as np
 from ..errors import NonFiniteError, NotPositiveDefiniteError, QPSolveError, RealizabilityError, RealizabilityWarning
 from .data import StepProblem
 from .protocol import Group
+from .realizability import group_margins, margin_of, singular_values, step_margin
 from .realizability import margin as realizability_margin
-from .realizability import margin_of, singular_values, step_margin
 from .results import StepResult
 
 __all__ = ["QP_TOLERANCE", "Group", "Where", "evaluation_failed", "singular_values", "step_margin", "to_result"]
@@ -73,7 +73,8 @@ def _not_positive_definite(data: StepProblem, t: float) -> NotPositiveDefiniteEr
 def _unrealizable(
     data: StepProblem, t: float, margin: float, groups: Sequence[Group], margin_error: float
 ) -> RealizabilityError:
-    solo = [(realizability_margin(data.A, data.J[g.rows], data.D[:, g.cols]), g) for g in groups]
+    margins = group_margins(data.A, data.J, data.D, [(g.rows, g.cols) for g in groups])  # one factorization of A
+    solo = list(zip(margins, groups, strict=True))
     worst_margin, worst = min(solo, key=lambda s: s[0])
     if worst_margin < margin_error or len(groups) == 1:
         realization = f" by its {worst.label} realization" if worst.label else ""

@@ -52,6 +52,25 @@ def cosines(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> np.ndarray:
     return np.linalg.svd(S, compute_uv=False)
 
 
+def group_margins(A: np.ndarray, J: np.ndarray, D: np.ndarray, blocks: list[tuple[slice, slice]]) -> list[float]:
+    """:func:`margin` of each block ``(rows, cols)`` of ``J`` and ``D`` alone, on one factorization of ``A``: a
+    block's normalized ``S`` is the block of the whole one (each row and column normalized by itself)."""
+    A, J, D = (np.atleast_2d(np.asarray(x, float)) for x in (A, J, D))
+    solved = np.linalg.solve(A, np.hstack([D, J.T]))
+    AinvD, AinvJt = solved[:, : D.shape[1]], solved[:, D.shape[1] :]
+    row = np.sqrt(np.einsum("ij,ji->i", J, AinvJt))
+    col = np.sqrt(np.einsum("ij,ij->j", D, AinvD))
+    out = []
+    for rows, cols in blocks:
+        Jb = J[rows]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            S = (Jb @ AinvD[:, cols]) / np.outer(row[rows], col[cols])
+        k, m = S.shape
+        cos = np.linalg.svd(S, compute_uv=False) if np.all(np.isfinite(S)) else np.zeros(min(k, m))
+        out.append(margin_of(cos, k, m))
+    return out
+
+
 def margin_of(cos: np.ndarray, k: int, m: int) -> float:
     """The margin ``σ_k`` from the cosines of ``k`` rows and ``m`` directions: 1 if ``k = 0``, 0 if ``k > m``
     (or no cosines), else the smallest — the last, as singular values come largest first (NaN in, NaN out:

@@ -49,6 +49,8 @@ from ..bound import Bound
 from ..protocol import StepModel
 from ..qp import QPBackend, short_name
 from ..qp.casadi_conic import CasadiConic, stdout_silenced
+from . import sparse_pattern
+from .drift import relative_drift
 from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
@@ -144,22 +146,6 @@ def _violation(Aqp: Any, lba: Any, uba: Any, lbx: Any, ubx: Any, x: Any) -> Any:
     return viol
 
 
-def _drift(model: StepModel) -> ca.SX:
-    """How far the state is off the constraints, relative: ``max |Φᵢ|/‖Jᵢ‖/(1 + max|v|)`` and, on holonomic rows,
-    ``|gᵢ|/‖Jᵢ‖/(1 + max|q|)`` (as :func:`.manifold.off_manifold`)."""
-    p, mech = model.expressions, model.mechanism
-    if not model.k:
-        return ca.SX(0)
-    J, Phi = p.J, p.Phi
-    nrm = ca.sqrt(ca.sum2(J * J))
-    nrm = ca.if_else(nrm == 0, 1, nrm)
-    off = ca.mmax(ca.fabs(Phi) / nrm) / (1 + ca.mmax(ca.fabs(mech.v)))
-    hol = model.holonomic_rows
-    if hol and p.g is not None:
-        off = ca.fmax(off, ca.mmax(ca.fabs(p.g[hol]) / nrm[hol]) / (1 + ca.mmax(ca.fabs(mech.q))))
-    return off
-
-
 def _pick(x: Any, idx: list[int]) -> Any:
     """Entries ``idx`` of the column ``x`` (an empty list gives an empty column, also for a 1×1 ``x``)."""
     return x[idx] if idx else ca.SX(0, 1)
@@ -231,7 +217,7 @@ class _Graph:
             self.At = S[rows_t, kc] if rows_t else ca.SX(0, len(kc))
             self.lbt = ca.vertcat(_pick(r, K), _pick(r, C))
             self.ubt = ca.vertcat(_pick(r, K), ca.DM.inf(len(C)))
-        self.drift = _drift(model)
+        self.drift = relative_drift(model)
         self.checks = self._watch(model, pat, Jn, r, scale, consistency_tol, track)
 
     def _watch(
@@ -382,8 +368,14 @@ class GeneralCall:
         self.pattern, self.backend = pat, backend
         self.nv, self.nq, self.k, self.m = model.nv, model.nq, model.k, model.m
         self.nc_all = len(model.contact_row_names)
+        #: the pattern of a large redundant linkage, in its own sparsity (:mod:`.sparse_pattern`): no ``S`` output
+        self.sparse = sparse_pattern.applies(model, pat.kept_rows, pat.kept_cols, pat.closed)
         self.sizes = self._sizes(model, pat)
-        fn = self._function(model, pat, backend, consistency_tol)
+        if self.sparse:
+            outs = sparse_pattern.sparse_step(model, pat.kept_rows, consistency_tol, SINGULAR_BAND, SINGULAR_FLOOR)
+            fn = ca.Function("general_step_sparse", model.inputs, [ca.cse(o) for o in outs])
+        else:
+            fn = self._function(model, pat, backend, consistency_tol)
         self._bound = Bound(fn)
         self._args = self._bound.args
         self._out = self._bound.res[0]
@@ -393,7 +385,7 @@ class GeneralCall:
         #: what every result of this pattern shares: the rows' counts, the stages, where the contact forces go
         self.m_all, self.k_all = m_all, model.k + len(pat.closed)
         self.closed = np.array(pat.closed, dtype=int)
-        self.least_norm = len(pat.kept_cols) < m_all
+        self.least_norm = len(pat.kept_cols) < m_all and not self.sparse  # the sparse route: u_D = 0
         eq = sum(1 for grp, b in zip(model.groups, model.group_bounds, strict=True) if b is None for _ in range(
             grp.rows.start, grp.rows.stop))  # fmt: skip
         self.redundant = eq - len(pat.kept_rows)
@@ -410,7 +402,7 @@ class GeneralCall:
             residual=k + nc,
             Phi=k,
             a_free=nv,
-            S=(k + nc) * m_all,
+            S=0 if self.sparse else (k + nc) * m_all,
             tracking_error=1,
             at_bound=m_all,
             saturated_branch=1,

@@ -134,7 +134,7 @@ def _from_packed(
     """The packed outputs of a compiled call as the Python route's three results (the solution only if asked)."""
     f = {name: out[sl] for name, sl in call.slices.items()}
     m, k = model.m, model.k
-    S = f["S"].reshape(call.k_all, call.m_all, order="F")
+    S = None if call.sparse else f["S"].reshape(call.k_all, call.m_all, order="F")
     contact_force = np.zeros(call.nc_all)
     contact_force[call.closed] = f["u"][m:]
     at_bound = f["at_bound"] > 0.5
@@ -151,8 +151,9 @@ def _from_packed(
             at_bound=at_bound, stages=stages, redundant_rows=call.redundant, S_norm=S, kept_rows=pat.kept_rows,
             kept_cols=pat.kept_cols, isolated_rank_drop=False,
         ))  # fmt: skip
-    Sk = S[:k, :m]
-    cos = dense.singular_values(Sk) if k else np.zeros(0)
+    Sk = None if S is None else S[:k, :m]
+    # the sparse route computes no S (redundant rows: margin 0 by design, the cosines unknown)
+    cos = np.zeros(0) if Sk is None or not k else dense.singular_values(Sk)
     result = StepResult.of_fields(dict(
         t=t, a=f["a"], u=f["u"][:m], reaction=f["reaction"], compulsion=compulsion, margin=margin_of(cos, k, m),
         cosines=cos, residual=f["residual"][:k], constraint_value=f["Phi"], free_acceleration=f["a_free"],
@@ -175,7 +176,7 @@ def rhs_outputs(model: StepModel, call: GeneralCall, out: np.ndarray) -> dict[st
         "a": f["a"], "u": f["u"][:m], "reaction": f["reaction"], "compulsion": f["compulsion"], "Phi": f["Phi"],
         "tracking_error": f["tracking_error"], "saturated": f["at_bound"][:m] > 0.5, "qdot": f["qdot"],
         "energy": f["energy"], "power_forces": f["power"], "power_reaction": f["power_reaction"], "g": f["g"],
-        "S_norm": f["S"].reshape(call.k_all, call.m_all, order="F")[:k, :m],
+        "S_norm": None if call.sparse else f["S"].reshape(call.k_all, call.m_all, order="F")[:k, :m],
     }  # fmt: skip
 
 

@@ -1,0 +1,172 @@
+"""The compiled general step of a large redundant linkage, in the mechanism's own sparsity.
+
+A mechanism written in maximal coordinates with every joint's rows (a ladder of parallelograms, an
+overconstrained loop) has a block-diagonal ``A`` and banded rows ``J``; when its realizations are ideal
+(``D = Jᵀ``), its general step on an open piece of the manifold is the equality step of the *kept* rows ``K``
+alone: the dropped rows are combinations of them and hold by themselves. The dense pattern of :mod:`.compiled`
+whitens with a dense Cholesky factor of ``A`` and tests every dropped row against the kept ones one by one —
+O(k³) nodes in the graph, 0.3 million at 82 rows. This route keeps the sparsity (casadi's symbolic sparse
+``LDLᵀ`` with an approximate-minimum-degree order, as :mod:`gausspp.step.sparse`), so that the graph grows with
+the factors' entries:
+
+* ``A = Pᵀ L diag(d) Lᵀ P``; ``a₀ = A⁻¹(f + r₀)``; rows normalized in ``A⁻¹``: ``Jn = J/‖J‖_{A⁻¹}``;
+* the kept rows' Gram matrix ``G = Jn_K A⁻¹ Jn_Kᵀ`` (unit diagonal) by a sparse ``LDLᵀ``; ``G x = r_K`` with
+  ``r = (φ − J a₀)/‖J‖_{A⁻¹}`` in the unit of :mod:`.scaling`, damped near a singular position in proportion to
+  the state's drift by the dense symmetric pattern's ``ε`` (:func:`.compiled._symmetric_qp`), added here to the
+  factor's pivots — ``(G + ε L Lᵀ) x = r_K``, one factorization instead of two; ``ε`` vanishes on the manifold
+  and is ``drift · 1e-12/σ⁴`` away from a singular position, where the two dampings agree to that order;
+* ``u_K = x/‖J_K‖``, ``u_D = 0``: the reaction ``J_Kᵀ u_K`` is the dense pattern's; its split among dependent
+  rows is not unique, and this route leaves it on the kept rows rather than computing the least-norm share.
+
+The dense pattern's watch, per dropped row, becomes one test of a fixed random combination ``ρ`` of the dropped
+rows (one more sparse solve): ``j_ρ = ρᵀ Jn_D`` must lie in the kept rows' span (its sine in ``A⁻¹`` at most
+:data:`~.redundancy.DEPENDENCE_TOL`), its right-hand side agree with theirs, and its residuals ``Φ``, ``g``
+follow theirs (:data:`~.manifold.REACH_TOL`). A dropped row that leaves the span, or disagrees, moves the
+combination with it unless ``ρ`` is orthogonal to the change — a set of measure zero the fixed ``ρ`` does not
+meet by design. Plus the kept rows' ``LDLᵀ`` pivots (positive), ``A``'s pivots, finite inputs and outputs, and
+the kept rows' feasibility. The step's ``S`` (dense ``k × m``) is not among the outputs: the margin of redundant
+rows is zero by design.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..protocol import StepModel
+from .drift import relative_drift
+from .kept_rows import AGREEMENT_SLACK
+from .manifold import REACH_TOL
+from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
+
+#: From this many bilateral rows on, a pattern that can take this route takes it (measured on the ladder of
+#: double parallelograms, ``benchmarks/general_step.py``).
+SPARSE_FROM_ROWS = 40
+#: ... and when ``A`` has at most this fraction of its entries.
+SPARSE_DENSITY = 0.5
+#: The fixed seed of the random combination of the dropped rows.
+COMBINATION_SEED = 20261125
+
+
+def applies(model: StepModel, kept_rows: tuple[int, ...], kept_cols: tuple[int, ...], closed: tuple[int, ...]) -> bool:
+    """Whether a pattern takes this route: ideal rows (``S`` symmetric by construction), no contacts, no bounds, rows
+    and columns kept alike, many rows and a sparse ``A``."""
+    if closed or model.contact_row_names or model.bounded or kept_rows != kept_cols:
+        return False
+    if not getattr(model, "symmetric_S", False):
+        return False
+    if model.k < SPARSE_FROM_ROWS or model.k == len(kept_rows):
+        return False
+    A = model.expressions.A
+    return ca.sparsify(A).nnz() <= SPARSE_DENSITY * A.shape[0] * A.shape[0]
+
+
+def _combination(n: int) -> np.ndarray:
+    """Fixed weights of magnitude 0.5 … 1.5 and random signs (the same for every call)."""
+    rng = np.random.default_rng(COMBINATION_SEED)
+    return rng.uniform(0.5, 1.5, n) * rng.choice([-1.0, 1.0], n)
+
+
+def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float, floor: float) -> list[Any]:
+    """The packed outputs of :data:`.compiled.FIELDS` (``S`` empty), the flag and the closed-contacts flag, as SX
+    expressions of the model's inputs (module docstring). ``band``, ``floor``: the damping of the dense symmetric
+    pattern near a singular position."""
+    p, mech = model.expressions, model.mechanism
+    k, K = model.k, list(kept)
+    D_rows = [i for i in range(k) if i not in kept]
+    dA, LtA, pA = ca.ldl(ca.sparsify(p.A), True)
+
+    def solve_A(b: ca.SX) -> ca.SX:
+        return ca.sparsify(ca.ldl_solve(b, dA, LtA, pA))
+
+    pivot_A = ca.mmin(ca.if_else(dA > 0, dA, -1)) / ca.mmax(ca.fabs(ca.diag(p.A)))
+    a_free, a0 = solve_A(p.f), solve_A(p.f + p.r0)
+    J = ca.sparsify(p.J)
+    AinvJt = solve_A(J.T)
+    norms = ca.sqrt(ca.sum2(J * AinvJt.T))  # ‖Jᵢ‖ in A⁻¹
+    norms = ca.if_else(norms > 0, norms, 1)
+    Jn = ca.diag(1 / norms) @ J
+    AinvJnt = AinvJt @ ca.diag(1 / norms)
+    JnK, AinvJnK = Jn[K, :], AinvJnt[:, K]
+    G = ca.sparsify(JnK @ AinvJnK)
+    Ja0 = J @ a0
+    r_raw = (p.phi - Ja0) / norms
+    big = ca.mmax(ca.fabs(r_raw))
+    unit = ca.if_else(big > 0, big, 1.0)
+    r = r_raw / unit
+    scale = (ca.mmax(ca.fabs(p.phi / norms)) + ca.mmax(ca.fabs(Ja0 / norms))) / unit
+
+    # the kept rows' Gram matrix, factored as it is (pivots: independence) and damped near a singular position
+    dG, LtG, pG = ca.ldl(G, True)
+    pivots = ca.if_else(dG >= 0, dG, 0)  # NaN counts as 0
+    smallest = ca.mmin(pivots)
+    drift = relative_drift(model)
+    damping = drift * band**2 / (band**2 + smallest * smallest)
+    damping = ca.if_else(smallest > floor, damping, damping + floor)
+    x = ca.ldl_solve(r[K], dG + damping, LtG, pG)  # the pivots damped: (G + ε L Lᵀ) x = r_K
+
+    u = ca.SX.zeros(model.m)
+    u[K] = x * unit / norms[K]
+    reaction_c = JnK.T @ x * unit  # J_Kᵀ u_K
+    a = a0 + AinvJnK @ x * unit
+    reaction = p.r0 + p.D @ u
+    residual = J @ a - p.phi
+
+    checks = [pivot_A > 0, ca.mmin(dG) > 0]  # A positive definite; the kept rows independent (NaN fails)
+    relax = ca.fmin(1, ca.sqrt(smallest) / CLEARLY_INDEPENDENT)
+    singular = ca.logic_not(relax > 0)
+    if D_rows:
+        rho = ca.DM(_combination(len(D_rows)))
+        j_rho = rho.T @ Jn[D_rows, :]
+        Ainv_j = AinvJnt[:, D_rows] @ rho
+        combo = ca.ldl_solve(JnK @ Ainv_j, dG, LtG, pG)  # j_ρ ≈ comboᵀ Jn_K
+        rest = j_rho.T - JnK.T @ combo
+        length = ca.sqrt(ca.fmax(ca.dot(j_rho.T, Ainv_j), 1e-300))
+        sine = ca.sqrt(ca.fmax(ca.dot(rest, solve_A(rest)), 0)) / length
+        checks.append(ca.logic_or(singular, sine * relax <= DEPENDENCE_TOL))
+        y_norm = ca.sqrt(ca.fmax(ca.dot(x, r[K]), 0))  # ‖y‖ of the kept rows' least-norm answer, in A⁻¹
+        r_rho = ca.dot(rho, r[D_rows])
+        miss = ca.fabs(r_rho - ca.dot(combo, r[K])) - AGREEMENT_SLACK * sine * length * y_norm
+        agree = miss * relax <= tol * ca.fmax(scale, 1e-300) * (ca.sum1(ca.fabs(rho)) + ca.sum1(ca.fabs(combo)))
+        checks.append(ca.logic_or(singular, agree))
+        # the witness that the dropped rows hold together: their residuals follow the kept rows' (to first order)
+        w = combo / norms[K]  # in the rows' own units: Σ ρ_d J_d/‖J_d‖ ≈ Σ w_i J_i
+        rho_u = rho / norms[D_rows]
+        euclid = ca.fmax(ca.norm_2(j_rho), 1e-300)  # the combined row's length as a coordinate gradient
+        v_size, q_size = 1 + ca.mmax(ca.fabs(mech.v)), 1 + ca.mmax(ca.fabs(mech.q))
+        fit_v = (ca.dot(rho_u, p.Phi[D_rows]) - ca.dot(w, p.Phi[K])) / euclid
+        checks.append(ca.fabs(fit_v) <= REACH_TOL * v_size * ca.sum1(ca.fabs(rho)))
+        hol = set(model.holonomic_rows)
+        if p.g is not None and all(d in hol for d in D_rows) and all(i in hol for i in K):
+            fit_g = (ca.dot(rho_u, p.g[D_rows]) - ca.dot(w, p.g[K])) / euclid
+            checks.append(ca.fabs(fit_g) <= REACH_TOL * q_size * ca.sum1(ca.fabs(rho)))
+    feasible = ca.mmax(ca.fabs(G @ x - r[K])) / (1 + ca.mmax(ca.fabs(x)))
+    checks.append(feasible <= 1e-9 + damping * (1 + ca.mmax(ca.fabs(x))))
+
+    outs = [
+        a,
+        u,
+        reaction,
+        ca.dot(reaction_c, a - a0),  # Z = rᵀ A⁻¹ r
+        residual,
+        p.Phi,
+        a_free,
+        ca.SX(0, 1),  # S: not computed on this route
+        ca.SX(0),
+        ca.SX.zeros(model.m),
+        ca.SX(0),
+        mech.qdot,
+        mech.energy if mech.energy is not None else ca.SX(0),
+        ca.dot(mech.v, mech.F_nc) if mech.F_nc is not None else ca.SX(0),
+        ca.dot(mech.v, reaction),
+        p.g if p.g is not None else ca.SX.zeros(k),
+        ca.SX(0, 1),  # no contact rows on this route
+    ]
+    packed = ca.vertcat(*(ca.vec(ca.densify(ca.SX(o))) for o in outs))
+    ins_finite = ca.fabs(sum(ca.sum1(ca.vec(s)) for s in model.inputs)) < ca.inf
+    flag = ca.logic_and(ins_finite, ca.fabs(ca.sum1(packed)) < ca.inf)
+    for chk in checks:
+        flag = ca.logic_and(flag, chk)
+    return [ca.vertcat(packed, flag, ca.SX(1))]
