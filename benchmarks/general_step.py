@@ -7,8 +7,9 @@ Prints, measured in one run on this machine:
   for (redundant four-bar / minimal four-bar's QP step; resting block and saturated crane / pendulum's QP step);
 * whole ``gp.simulate`` runs: the redundant four-bar over 2 s (error against the minimal model), the saturated
   crane over 3 s, the block dropped on the floor over 3 s, the double parallelogram through its first collinear
-  position — beside MuJoCo's four-bar (``connect``, RK4, dt = 1e-3, stiffest settings) and box drop when the
-  peers extra is installed (``benchmarks/_mujoco_peers.py``);
+  position, the spatial double parallelogram (revolute joints: 24 coordinates, 30 rows of rank 23, an
+  overconstrained loop the size of Bricard's) swinging for 10 s — beside MuJoCo's four-bar (``connect``, RK4,
+  dt = 1e-3, stiffest settings) and box drop when the peers extra is installed (``benchmarks/_mujoco_peers.py``);
 * the ladder of double-parallelogram cells: ``model.step`` for N = 4 … 64 and its growth exponent, the first
   step's time (the Python route decides, the pattern compiles), beside MuJoCo's parallelogram ladder (its cells
   without the third bar: MuJoCo's soft ``connect`` rows need none).
@@ -118,6 +119,23 @@ def measure(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
             lambda: gp.simulate(double.model, double.q0, double.v0, 1.0, method="cvodes-adams", rtol=1e-10,
                                 atol=1e-10), 2)  # fmt: skip
         out["  error vs one-DOF reference (m)"] = float(np.abs(run.q - qref).max())
+        try:  # an overconstrained spatial loop the size of Bricard's, swinging below its collinear positions
+            from gausspp.scenes import spatial_parallelogram as SP
+
+            swing = scenes.get("spatial-parallelogram", theta0=-np.pi / 2, omega0=1.0)
+            run = gp.simulate(swing.model, swing.q0, swing.v0, 10.0, record=np.linspace(0, 10, 101))
+            theta, omega = SP.one_dof_reference(run.t, **swing.params)
+            qref = np.array([SP.maximal_state(a, b)[0] for a, b in zip(theta, omega, strict=True)])
+            fresh = scenes.get("spatial-parallelogram", theta0=-np.pi / 2, omega0=1.0)  # nothing compiled yet
+            start = time.perf_counter()
+            gp.simulate(fresh.model, fresh.q0, fresh.v0, 10.0)
+            out["spatial double parallelogram 10 s, defaults, first run (ms)"] = (time.perf_counter() - start) * 1e3
+            out["spatial double parallelogram 10 s, defaults (ms)"] = _best_ms(
+                lambda: gp.simulate(swing.model, swing.q0, swing.v0, 10.0), 2
+            )
+            out["  error vs one-DOF reference (m) "] = float(np.abs(run.q - qref).max())
+        except Exception as exc:  # a scene this revision does not have
+            print(f"(spatial rows skipped: {type(exc).__name__}: {exc})", file=sys.stderr)
         for n in ladder_sizes:
             ladder = scenes.get("parallelogram", cells=n, third_bar=True)
             m = ladder.model

@@ -45,7 +45,7 @@ def call_at(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray):
 def test_a_large_redundant_linkage_takes_the_sparse_route_and_a_small_one_does_not() -> None:
     model, _, T, Q, V = ladder()
     call, _ = call_at(model, float(T[1]), Q[1], V[1])
-    assert call.sparse and not call.least_norm and call.redundant == CELLS
+    assert call.sparse and call.least_norm and call.redundant == CELLS
     small = scenes.get("four-bar-redundant")
     general_step.solve_at(small.model, 0.0, small.q0, small.v0, np.zeros(0), None)
     assert not general_step.current_call(small.model, None, None, CONSISTENCY_TOL).sparse
@@ -66,7 +66,19 @@ def test_the_sparse_step_is_the_gauss_qp_at_every_sample() -> None:
         scale = np.abs(reference.a).max() + np.abs(reference.free_acceleration).max()
         assert np.abs(result.a - reference.a).max() < 1e-10 * scale
         assert np.abs(result.reaction - reference.reaction).max() < 1e-9 * (1 + np.abs(reference.reaction).max())
+        assert result.disagreement(reference) < 1e-9  # a and u: the least-norm split of the reaction, as there
         assert result.margin == 0.0  # redundant rows
+
+
+def test_a_long_ladder_leaves_the_reaction_on_its_kept_rows() -> None:
+    """Beyond LEAST_NORM_ROWS dropped rows the split is the kept rows' (the dropped rows' multipliers 0): the
+    reaction and the acceleration are still the Gauss step's, from the data alone."""
+    cells = sparse_pattern.LEAST_NORM_ROWS + 2
+    sc = scenes.get("parallelogram", cells=cells, third_bar=True)
+    call, result = call_at(sc.model, 0.0, sc.q0, sc.v0)
+    assert call.sparse and not call.least_norm and call.redundant == cells
+    assert (result.u == 0).sum() == cells  # the dropped rows'
+    assert optimality_gap(sc.model, 0.0, sc.q0, sc.v0, np.zeros(0), result, None) < 1e-9
 
 
 def test_the_data_check_fails_on_a_wrong_sparse_answer() -> None:

@@ -30,28 +30,31 @@ def test_a_step_too_long_for_the_motion_is_a_failed_run_not_a_success() -> None:
 
 
 def test_a_step_across_a_singular_position_stops_instead_of_jumping_branch() -> None:
-    """The double parallelogram (rows redundant everywhere, rank dropping again at each collinear position) by rk4
-    at dt = 0.01: the run either follows the one-degree-of-freedom reference or stops with an error. Measured:
-    it stops at t = 2.66 (|Φ| = 0.022 there) with every earlier sample within 2e-6 m of the reference; with the
-    audit switched off (drift_tol = 1) the same run goes on off the branch (0.38 m) before it diverges."""
+    """The double parallelogram (rows redundant everywhere, rank dropping again at each collinear position) by rk4:
+    the run either follows the one-degree-of-freedom reference as fourth order allows or stops with an error.
+    Measured: at dt = 0.01 it passes four collinear positions (error 1e-6 m before the third, 16 times less at
+    dt = 0.005) and stops at t = 4.58 with a DriftError, every earlier sample within 4e-4 m of the reference; with
+    the audit switched off (drift_tol = 1) the same run goes off the branch unnoticed (3 m) before it ends."""
     scene = gp.scenes.get("parallelogram", third_bar=True)
+    crossings = parallelogram.collinear_times(**{**scene.params, "t_end": 5.0})
 
-    def run(drift_tol: float) -> tuple[gp.Trajectory, np.ndarray]:
-        traj = gp.simulate(
-            scene.model, scene.q0, scene.v0, 5.0, method="rk4", dt=1e-2, throw=False, drift_tol=drift_tol
-        )
+    def run(dt: float, t_end: float, drift_tol: float = 1e-3) -> tuple[gp.Trajectory, np.ndarray]:
+        options = dict(method="rk4", dt=dt, throw=False, drift_tol=drift_tol)
+        traj = gp.simulate(scene.model, scene.q0, scene.v0, t_end, **options)
         theta, omega = parallelogram.one_dof_reference(traj.t, **scene.params)
         ref = np.array([parallelogram.maximal_state(a, b, 0.0, 1, True)[0] for a, b in zip(theta, omega, strict=True)])
         return traj, np.abs(traj.q - ref).max(axis=1)
 
-    audited, err = run(1e-3)
-    assert (
-        audited.t[-1] > parallelogram.collinear_times(**{**scene.params, "t_end": 5.0})[0]
-    )  # it passed a collinear position
-    if not audited.success:
-        assert isinstance(audited.failure, gp.GaussppError)
-    assert err[:-1].max() < 1e-4  # every sample before the last on the branch (the last shows the departure)
-    unaudited, err_off = run(1.0)
+    coarse, err = run(1e-2, 5.0)
+    assert coarse.t[-1] > crossings[1]  # it passed collinear positions
+    if not coarse.success:
+        assert isinstance(coarse.failure, gp.GaussppError)
+    assert err[:-1].max() < 1e-3  # on the branch up to the last sample (a branch jump is of the bars' length)
+    fine, err_fine = run(5e-3, crossings[2] - 0.05)
+    assert fine.success
+    before_third = np.searchsorted(coarse.t, fine.t[-1])
+    assert err_fine[-1] * 8 < err[before_third]  # fourth order through two collinear positions (measured 16)
+    _, err_off = run(1e-2, 5.0, drift_tol=1.0)
     assert err_off.max() > 1e-2  # the control: without the audit the run leaves the branch unnoticed
 
 

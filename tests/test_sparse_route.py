@@ -18,6 +18,8 @@ FIELDS = ("a", "u", "reaction", "compulsion", "S_norm", "residual", "a_free", "q
 # servo scenes: no one-step route; robot scenes: the robots extra (tests/test_robot_scenes.py)
 ONE_STEP = [n for n in gp.scenes.names() if n not in gp.scenes.names("servo") + gp.scenes.names("robot")]
 SCENES = [n for n in ONE_STEP if not (gp.scenes.get(n).model.contacts or gp.scenes.get(n).model.bounded)]
+#: Scenes whose rows are redundant at their initial state (J A⁻¹ D singular): no direct step, the QP steps them.
+REDUNDANT = ("four-bar-redundant", "spatial-parallelogram")
 
 
 def with_route(model: gp.Model, route: str) -> gp.Model:
@@ -62,7 +64,7 @@ def test_sparse_and_dense_routes_agree_on_every_scene(name: str, solver: str) ->
     dense, sparse_ = with_route(scene.model, "dense"), with_route(scene.model, "sparse")
     assert (dense.route, sparse_.route) == ("dense", "sparse")
     q, v, lam = state(scene)
-    if name == "four-bar-redundant":  # no step of its own (S singular): both routes hand it to the general QP
+    if name in REDUNDANT:  # no step of its own (S singular): both routes hand it to the general QP
         if solver == "direct":
             for model in (dense, sparse_):
                 with pytest.raises(gp.RealizabilityError, match="needs independent rows"):

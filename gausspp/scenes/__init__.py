@@ -37,6 +37,7 @@ _MODULES: dict[str, str] = {
     "planar-chain": "planar_chain",
     "planar-ladder": "planar_chain",
     "parallelogram": "parallelogram",
+    "spatial-parallelogram": "spatial_parallelogram",
     "overhead-crane": "overhead_crane",
     "spring-chain-servo": "spring_chain_servo",
     "ur5-tool-path": "ur5_tool_path",
@@ -45,7 +46,8 @@ _MODULES: dict[str, str] = {
 
 #: Scenes whose step is not a square equality system (contacts, bounded or extra actuators, redundant
 #: rows): only the general Gauss QP steps them, so studies that compare the direct formula skip them.
-#: The parallelogram's rows are redundant at every state with ``third_bar`` and at its collinear positions without.
+#: The parallelogram's rows are redundant at every state with ``third_bar`` and at its collinear positions without;
+#: the spatial parallelogram's (revolute joints) at every state.
 GENERAL = (
     "block-on-floor",
     "bouncing-pendulum",
@@ -53,6 +55,7 @@ GENERAL = (
     "two-actuator-servo",
     "four-bar-redundant",
     "parallelogram",
+    "spatial-parallelogram",
 )
 
 #: Servo scenes realized tangentially (issue 19): the one-step matrix ``J A⁻¹ Mᵀ`` is singular at every state

@@ -45,7 +45,12 @@ STEPS = {"stiff-chain": 20_000, "andrews": 4_000}
 #: 1e-11 takes a quarter fewer steps, and keeps the two backends' gap far below the table's 1e-8 claims).
 GENERAL_RTOL = 1e-10
 
-GENERAL_T_END = {"saturated-crane": 1.0, "four-bar-redundant": 0.25, "parallelogram": 0.5}
+GENERAL_T_END = {
+    "saturated-crane": 1.0,
+    "four-bar-redundant": 0.25,
+    "parallelogram": 0.5,
+    "spatial-parallelogram": 0.5,
+}
 
 #: Scene parameters of the general-QP rows: a crane motor of 8 N (12 by default) saturates within the first second.
 GENERAL_PARAMS: dict[str, dict[str, Any]] = {"saturated-crane": {"F_max": 8.0}}

@@ -372,7 +372,7 @@ class GeneralCall:
         self.sparse = sparse_pattern.applies(model, pat.kept_rows, pat.kept_cols, pat.closed)
         self.sizes = self._sizes(model, pat)
         if self.sparse:
-            outs = sparse_pattern.sparse_step(model, pat.kept_rows, consistency_tol, SINGULAR_BAND, SINGULAR_FLOOR)
+            outs = sparse_pattern.sparse_step(model, pat.kept_rows, consistency_tol, SINGULAR_BAND)
             fn = ca.Function("general_step_sparse", model.inputs, [ca.cse(o) for o in outs])
         else:
             fn = self._function(model, pat, backend, consistency_tol)
@@ -385,7 +385,9 @@ class GeneralCall:
         #: what every result of this pattern shares: the rows' counts, the stages, where the contact forces go
         self.m_all, self.k_all = m_all, model.k + len(pat.closed)
         self.closed = np.array(pat.closed, dtype=int)
-        self.least_norm = len(pat.kept_cols) < m_all and not self.sparse  # the sparse route: u_D = 0
+        dropped = m_all - len(pat.kept_cols)
+        # the sparse route splits least-norm up to LEAST_NORM_ROWS dropped rows; beyond, u_D = 0
+        self.least_norm = dropped > 0 and (not self.sparse or dropped <= sparse_pattern.LEAST_NORM_ROWS)
         eq = sum(1 for grp, b in zip(model.groups, model.group_bounds, strict=True) if b is None for _ in range(
             grp.rows.start, grp.rows.stop))  # fmt: skip
         self.redundant = eq - len(pat.kept_rows)

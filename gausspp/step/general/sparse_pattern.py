@@ -1,4 +1,4 @@
-"""The compiled general step of a large redundant linkage, in the mechanism's own sparsity.
+"""The compiled general step of a redundant linkage, in the mechanism's own sparsity.
 
 A mechanism written in maximal coordinates with every joint's rows (a ladder of parallelograms, an
 overconstrained loop) has a block-diagonal ``A`` and banded rows ``J``; when its realizations are ideal
@@ -11,12 +11,13 @@ the factors' entries:
 
 * ``A = Pᵀ L diag(d) Lᵀ P``; ``a₀ = A⁻¹(f + r₀)``; rows normalized in ``A⁻¹``: ``Jn = J/‖J‖_{A⁻¹}``;
 * the kept rows' Gram matrix ``G = Jn_K A⁻¹ Jn_Kᵀ`` (unit diagonal) by a sparse ``LDLᵀ``; ``G x = r_K`` with
-  ``r = (φ − J a₀)/‖J‖_{A⁻¹}`` in the unit of :mod:`.scaling`, damped near a singular position in proportion to
-  the state's drift by the dense symmetric pattern's ``ε`` (:func:`.compiled._symmetric_qp`), added here to the
-  factor's pivots — ``(G + ε L Lᵀ) x = r_K``, one factorization instead of two; ``ε`` vanishes on the manifold
-  and is ``drift · 1e-12/σ⁴`` away from a singular position, where the two dampings agree to that order;
-* ``u_K = x/‖J_K‖``, ``u_D = 0``: the reaction ``J_Kᵀ u_K`` is the dense pattern's; its split among dependent
-  rows is not unique, and this route leaves it on the kept rows rather than computing the least-norm share.
+  ``r = (φ − J a₀)/‖J‖_{A⁻¹}`` in the unit of :mod:`.scaling`. Near a singular position (a pivot of ``G`` below
+  :data:`~.compiled.SINGULAR_BAND`) the flag is down and the Python route answers; elsewhere the kept rows'
+  exact step, undamped (the dense pattern damps by ``drift · b²/(b² + σ⁴)``, which vanishes on the manifold);
+* the multipliers: the least-norm split over all rows, as the dense pattern gives it, up to
+  :data:`LEAST_NORM_ROWS` dropped rows (one more solve each); beyond, ``u_K = x/‖J_K‖`` and ``u_D = 0`` — the
+  reaction is the same, its split among dependent rows is not unique, and for a long ladder the least-norm one
+  would cost more than the step.
 
 The dense pattern's watch, per dropped row, becomes one test of a fixed random combination ``ρ`` of the dropped
 rows (one more sparse solve): ``j_ρ = ρᵀ Jn_D`` must lie in the kept rows' span (its sine in ``A⁻¹`` at most
@@ -36,16 +37,19 @@ import casadi as ca
 import numpy as np
 
 from ..protocol import StepModel
-from .drift import relative_drift
 from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
 
-#: From this many bilateral rows on, a pattern that can take this route takes it (measured on the ladder of
-#: double parallelograms, ``benchmarks/general_step.py``).
-SPARSE_FROM_ROWS = 40
+#: From this many bilateral rows on, a pattern that can take this route takes it. Measured, ``model.step`` sparse
+#: against dense: the double parallelogram (12 rows) 20 against 65 µs, the ladder of two cells (22) 27 against
+#: 158 µs, the spatial double parallelogram (30) 67 against 447 µs (``benchmarks/general_step.py`` for more).
+SPARSE_FROM_ROWS = 8
 #: ... and when ``A`` has at most this fraction of its entries.
 SPARSE_DENSITY = 0.5
+#: Up to this many dropped rows the multipliers are the least-norm split over all rows, as on the dense pattern
+#: (it costs one solve per dropped row); beyond, the kept rows carry the reaction and the dropped rows' are 0.
+LEAST_NORM_ROWS = 16
 #: The fixed seed of the random combination of the dropped rows.
 COMBINATION_SEED = 20261125
 
@@ -69,10 +73,10 @@ def _combination(n: int) -> np.ndarray:
     return rng.uniform(0.5, 1.5, n) * rng.choice([-1.0, 1.0], n)
 
 
-def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float, floor: float) -> list[Any]:
+def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float) -> list[Any]:
     """The packed outputs of :data:`.compiled.FIELDS` (``S`` empty), the flag and the closed-contacts flag, as SX
-    expressions of the model's inputs (module docstring). ``band``, ``floor``: the damping of the dense symmetric
-    pattern near a singular position."""
+    expressions of the model's inputs (module docstring). ``band``: below this smallest pivot of the kept rows'
+    Gram matrix (unit diagonal) the flag is down — near a singular position the Python route answers."""
     p, mech = model.expressions, model.mechanism
     k, K = model.k, list(kept)
     D_rows = [i for i in range(k) if i not in kept]
@@ -102,19 +106,27 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
     dG, LtG, pG = ca.ldl(G, True)
     pivots = ca.if_else(dG >= 0, dG, 0)  # NaN counts as 0
     smallest = ca.mmin(pivots)
-    drift = relative_drift(model)
-    damping = drift * band**2 / (band**2 + smallest * smallest)
-    damping = ca.if_else(smallest > floor, damping, damping + floor)
-    x = ca.ldl_solve(r[K], dG + damping, LtG, pG)  # the pivots damped: (G + ε L Lᵀ) x = r_K
+    x = ca.ldl_solve(r[K], dG, LtG, pG)
 
     u = ca.SX.zeros(model.m)
-    u[K] = x * unit / norms[K]
-    reaction_c = JnK.T @ x * unit  # J_Kᵀ u_K
+    u_K = x * unit / norms[K]  # the kept rows' multipliers of the kept rows' own answer
+    if D_rows and len(D_rows) <= LEAST_NORM_ROWS:
+        # the least-norm split over dependent rows: J_D = C_uᵀ J_K (C_u from Jn_D = Cᵀ Jn_K, C = G⁻¹ Jn_K A⁻¹ Jn_Dᵀ),
+        # so u_K − C_u u_D gives the same reaction for every u_D; the least ‖u‖ has (I + C_uᵀC_u) u_D = C_uᵀ u_K
+        C = ca.ldl_solve(JnK @ AinvJnt[:, D_rows], dG, LtG, pG)
+        C_u = ca.diag(1 / norms[K]) @ C @ ca.diag(norms[D_rows])
+        u_D = ca.solve(ca.DM.eye(len(D_rows)) + C_u.T @ C_u, C_u.T @ u_K)
+        u_K = u_K - C_u @ u_D
+        u[D_rows] = u_D
+    u[K] = u_K
+    reaction_c = JnK.T @ x * unit  # J_Kᵀ u_K of the kept rows' own answer: the acceleration's
     a = a0 + AinvJnK @ x * unit
     reaction = p.r0 + p.D @ u
     residual = J @ a - p.phi
 
-    checks = [pivot_A > 0, ca.mmin(dG) > 0]  # A positive definite; the kept rows independent (NaN fails)
+    # A positive definite; the kept rows clearly independent: in the band around a singular position (where the dense
+    # pattern damps in proportion to the drift) the Python route answers (NaN fails too)
+    checks = [pivot_A > 0, ca.mmin(dG) >= band]
     relax = ca.fmin(1, ca.sqrt(smallest) / CLEARLY_INDEPENDENT)
     singular = ca.logic_not(relax > 0)
     if D_rows:
@@ -143,7 +155,7 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
             fit_g = (ca.dot(rho_u, p.g[D_rows]) - ca.dot(w, p.g[K])) / euclid
             checks.append(ca.fabs(fit_g) <= REACH_TOL * q_size * ca.sum1(ca.fabs(rho)))
     feasible = ca.mmax(ca.fabs(G @ x - r[K])) / (1 + ca.mmax(ca.fabs(x)))
-    checks.append(feasible <= 1e-9 + damping * (1 + ca.mmax(ca.fabs(x))))
+    checks.append(feasible <= 1e-9)
 
     outs = [
         a,
