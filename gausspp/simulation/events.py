@@ -109,6 +109,7 @@ class EventRun:
         self.events: list[dict[str, Any]] = []
         self.jumps: list[float] = []  # times of the velocity jumps (numbered from 1 in the events)
         self.steps = self.evaluations = 0
+        self._last_gaps: tuple[float, np.ndarray, tuple[np.ndarray, np.ndarray]] | None = None
         g, _gdot = self.gaps(self.t, y0)
         self.closed: set[int] = {int(i) for i in np.flatnonzero(g <= model.contact_tol)}
         self.departing: set[int] = set()  # at g ≈ 0 and separating: watched on ġ until they turn round
@@ -116,8 +117,15 @@ class EventRun:
         self.times = None if np.isscalar(record) else np.sort(np.asarray(record, float))
 
     def gaps(self, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The contacts' gaps and rates at ``(t, y)``; the last state's kept (scipy asks every event function, one
+        contact each, at the same state)."""
+        last = self._last_gaps
+        if last is not None and last[0] == t and np.array_equal(last[1], y):
+            return last[2]
         nq, nv = self.model.nq, self.model.nv
-        return gaps(self.model, t, y[:nq], y[nq : nq + nv])
+        out = gaps(self.model, t, y[:nq], y[nq : nq + nv])
+        self._last_gaps = (t, y.copy(), out)
+        return out
 
     def keep(self, t: float, y: np.ndarray, phase: int) -> None:
         self.ts.append(float(t))

@@ -47,9 +47,11 @@ from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
 SPARSE_FROM_ROWS = 8
 #: ... and when ``A`` has at most this fraction of its entries.
 SPARSE_DENSITY = 0.5
-#: Up to this many dropped rows the multipliers are the least-norm split over all rows, as on the dense pattern
-#: (it costs one solve per dropped row); beyond, the kept rows carry the reaction and the dropped rows' are 0.
-LEAST_NORM_ROWS = 16
+#: Up to this many dropped rows the multipliers are the least-norm split over all rows, as on the dense pattern;
+#: beyond, the kept rows carry the reaction and the dropped rows' are 0. The split costs one solve per dropped row
+#: and a product of their size: measured on the ladder, ``model.step`` 43 → 59 µs with 4 dropped rows, 65 → 140 µs
+#: with 8 and 115 → 476 µs with 16 (``benchmarks/general_step.py``).
+LEAST_NORM_ROWS = 8
 #: The fixed seed of the random combination of the dropped rows.
 COMBINATION_SEED = 20261125
 
