@@ -143,6 +143,11 @@ def measure(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
             m.step(0.0, ladder.q0, ladder.v0)
             out[f"first step ladder N={n} (s)"] = time.perf_counter() - start
             out[f"step ladder N={n}"] = _best_us(lambda m=m, s=ladder: m.step(0.0, s.q0, s.v0), n=20)
+        if 32 in ladder_sizes:  # the same step generated as C (Model(codegen=True): c_code, kept on disk)
+            ladder = scenes.get("parallelogram", cells=32, third_bar=True)
+            m = gp.Model(ladder.model.mechanism, list(ladder.model.constraints), codegen=True)
+            m.step(0.0, ladder.q0, ladder.v0)
+            out["step ladder N=32, codegen"] = _best_us(lambda m=m, s=ladder: m.step(0.0, s.q0, s.v0), n=20)
     except Exception as exc:  # a scene this revision does not have
         print(f"(parallelogram rows skipped: {type(exc).__name__}: {exc})", file=sys.stderr)
     return out
@@ -222,6 +227,10 @@ def main() -> None:
             if key in mj:
                 ratio = now[f"step ladder N={n}"] / mj[key]
                 print(f"  ladder N={n} model.step / MuJoCo's step: {ratio:.2f}" + (" (issue: ≤ 2)" if n == 32 else ""))
+        key = "MuJoCo parallelogram ladder N=32 (µs/step)"
+        if "step ladder N=32, codegen" in now and key in mj:
+            ratio = now["step ladder N=32, codegen"] / mj[key]
+            print(f"  ladder N=32 model.step as C (codegen=True) / MuJoCo's step: {ratio:.2f}")
 
 
 if __name__ == "__main__":

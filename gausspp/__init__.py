@@ -28,6 +28,7 @@ from .errors import (
     RealizabilityWarning,
     ShapeError,
     SweepLogWarning,
+    SweepWarning,
     SymbolicError,
     UnknownNameError,
 )
@@ -96,6 +97,7 @@ __all__ = [
     "StepProblem",
     "StepResult",
     "SweepLogWarning",
+    "SweepWarning",
     "SympyModel",
     "SymbolicError",
     "Trajectory",

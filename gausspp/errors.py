@@ -112,5 +112,9 @@ class LongRunWarning(GaussppWarning):
     """A run asks for very many steps (an estimate is given up front, before the wait)."""
 
 
+class SweepWarning(GaussppWarning):
+    """A sweep finished, but none of its tasks succeeded."""
+
+
 class SweepLogWarning(GaussppWarning):
     """A line of a sweep's JSON-lines log cannot be read: it is skipped and its task runs again."""

@@ -69,3 +69,16 @@ def positive(name: str, value: Any, *, zero_ok: bool = False, integer: bool = Fa
     if x < 0 or (x == 0 and not zero_ok):
         raise InputError(where)
     return x
+
+
+def flag(owner: str, name: str, value: Any) -> bool:
+    """A boolean keyword: ``True`` or ``False`` only (a string such as ``"no"`` is not taken as true)."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise InputError(f"{owner}: {name} must be True or False, got {short(value)}")
+    return bool(value)
+
+
+def instance(owner: str, name: str, value: Any, kind: type, what: str) -> None:
+    """Refuse a ``value`` that is not a ``kind`` (``what`` says what is expected, with an example)."""
+    if not isinstance(value, kind):
+        raise InputError(f"{owner}: {name} must be {what}, got {short(value)}")

@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 import json
 import math
+import re
 import subprocess
 import sys
 import warnings
@@ -569,6 +570,67 @@ ROWS = [
         gp.InputError,
         r"executor must be None, 'serial'.*got int",
     ),
+    # issue 28: the second list
+    row(
+        "Lagrangian of a billion coordinates",
+        lambda: gp.Lagrangian(n=10**9, T=lambda q, v, t: 0),
+        gp.InputError,
+        r"n=1000000000 coordinates: .*at most 10000",
+    ),
+    row("Vakonomic lam0 a string", lambda: gp.Vakonomic(lam0="x"), gp.InputError, r"lam0 .*'x'"),
+    row("Baumgarte alpha a string", lambda: gp.Baumgarte("a"), gp.InputError, r"Baumgarte: alpha .*'a'"),
+    row("Baumgarte beta NaN", lambda: gp.Baumgarte(1.0, math.nan), gp.InputError, r"Baumgarte: beta .*nan"),
+    row("Baumgarte.critical a string", lambda: gp.Baumgarte.critical("a"), gp.InputError, r"tau .*'a'"),
+    row(
+        "crosscheck of a scene's name",
+        lambda: gp.crosscheck("two-masses", 0.0, masses().q0, masses().v0),
+        gp.InputError,
+        r"crosscheck: model must be a gp.Model .*'two-masses'",
+    ),
+    row(
+        "crosscheck tolerance negative",
+        lambda: gp.crosscheck(masses().model, 0.0, masses().q0, masses().v0, tolerance=-1),
+        gp.InputError,
+        r"tolerance must be a positive number.*-1",
+    ),
+    row("replay of a string", lambda: gp.replay(masses().model, "abc"), gp.InputError, r"replay: traj .*'abc'"),
+    row("plot.trajectory of a string", lambda: gp.plot.trajectory("abc"), gp.InputError, r"trajectories: .*'abc'"),
+    row(
+        "Force bounds crossed",
+        lambda: gp.Force(lambda q, v, t: q, bounds=(1, -1)),
+        gp.InputError,
+        r"Force: a lower bound exceeds its upper bound: bounds=\(1, -1\)",
+    ),
+    row("Force bounds a string", lambda: gp.Force(lambda q, v, t: q, bounds=("a", 1)), gp.InputError, r"bounds .*'a'"),
+    row("grid axis a string", lambda: grid(realization="servo"), gp.InputError, r"grid axis realization='servo'"),
+    row(
+        "verify constraint_tol negative",
+        lambda: gp.verify(masses().model, run(v0=[0.5, 0.5]), constraint_tol=-1),
+        gp.InputError,
+        r"constraint_tol must be a non-negative number.*-1",
+    ),
+    row("from_urdf of no file", lambda: gp.from_urdf("/no/such.urdf"), gp.InputError, r"'/no/such.urdf': no such file"),
+    row("model.step refine a string", lambda: step(refine="no"), gp.InputError, r"refine must be True or False.*'no'"),
+    row(
+        "Model codegen a string",
+        lambda: gp.Model(body(), gp.Constraint(lambda q, v, t: v[1] - v[0]), codegen="yes"),
+        gp.InputError,
+        r"codegen must be True or False.*'yes'",
+    ),
+    row(
+        "sweep progress a string",
+        lambda: gp.sweep(gp.sweeps.realizability_task, [], executor="serial", progress="no"),
+        gp.InputError,
+        r"progress must be True or False.*'no'",
+    ),
+    row("simulate drift_tol zero", lambda: run(drift_tol=0), gp.InputError, r"drift_tol must be a positive number.*0"),
+    row("simulate dt longer than the run", lambda: run(dt=1.0), gp.InputError, r"dt=1 is longer than the run"),
+    row(
+        "simulate record times backwards",
+        lambda: run(method="RK45", dt=None, record=[0.005, 0.0]),
+        gp.InputError,
+        r"record times must increase.*record\[0\] = 0.005",
+    ),
 ]
 
 
@@ -774,3 +836,49 @@ def test_a_valid_state_still_steps() -> None:
     np.testing.assert_allclose(result.a, [0.5, 0.5], rtol=1e-12)
     traj = run(v0=[0.5, 0.5])
     assert traj.success and traj.t[-1] == pytest.approx(T_END)
+
+
+def test_from_urdf_names_a_file_that_is_no_urdf(tmp_path: Path) -> None:
+    broken, page = tmp_path / "broken.urdf", tmp_path / "page.urdf"
+    broken.write_text("<robot><link name='a'>")
+    page.write_text("<html></html>")
+    with pytest.raises(gp.InputError, match=r"broken.urdf' is not well-formed XML"):
+        gp.from_urdf(str(broken))
+    with pytest.raises(gp.InputError, match=r"page.urdf' is not a URDF file \(its root element is <html>"):
+        gp.from_urdf(str(page))
+
+
+def _always_fails(p: dict) -> dict:
+    raise ValueError(f"no result for x={p['x']}")
+
+
+def test_a_sweep_whose_every_task_fails_says_so() -> None:
+    with pytest.warns(gp.SweepWarning, match=r"every one of the 2 tasks failed \(the first: .*no result for x=1"):
+        result = gp.sweep(_always_fails, grid(x=[1, 2]), executor="serial", progress=False)
+    assert len(result.errors) == 2
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the control: one success, no warning
+        gp.sweep(_square_or_fail, grid(x=[1, 2]), executor="serial", progress=False)
+
+
+def _square_or_fail(p: dict) -> dict:
+    if p["x"] == 2:
+        raise ValueError("two")
+    return {"y": p["x"] ** 2}
+
+
+def test_an_adaptive_run_of_days_is_refused_from_its_first_steps_keeping_them() -> None:
+    """No dt, t_end = 1e9 s: the forecast from the first accepted steps refuses it (measured: 5e10 steps) at once,
+    with what was computed; a forecast of hours is announced (LongRunWarning) and goes on."""
+    s = gp.scenes.get("pendulum")
+    traj = gp.simulate(s.model, s.q0, s.v0, 1e9, throw=False)
+    assert traj.status == "failed" and isinstance(traj.failure, gp.IntegrationError)
+    assert re.search(r"to t_end=1e\+09 that is about [0-9.e+]+ steps, more than the 1e\+10", traj.message)
+    assert len(traj) > 100 and traj.t[-1] > 0  # the steps taken are kept
+    from gausspp.simulation import inputs
+
+    with pytest.warns(gp.LongRunWarning, match=r"about 5e\+06 steps: this run will take long"):
+        inputs.check_forecast("DOP853", 0.0, 5e4, 2.0, 200, 8, 200)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the control: a short run is neither refused nor announced
+        inputs.check_forecast("DOP853", 0.0, 5.0, 2.0, 200, 8, 200)

@@ -119,9 +119,19 @@ def _coordinate_lagrange_rows(N: ca.SX, q: ca.SX, v: ca.SX, t: ca.SX, qdot: ca.S
     return ca.vertcat(*rows) if rows else ca.SX(0, v.numel())
 
 
+#: The most coordinates a mechanism may have: its equations are built symbolically, one expression per entry
+#: (a chain of 10 000 bodies already takes minutes); more is refused before the memory runs out.
+MAX_COORDINATES = 10_000
+
+
 def _check_n(n: int) -> int:
-    if not isinstance(n, (int, np.integer)) or n < 1:
+    if isinstance(n, (bool, np.bool_)) or not isinstance(n, (int, np.integer)) or n < 1:
         raise InputError(f"n must be a positive integer, got {n!r}")
+    if n > MAX_COORDINATES:
+        raise InputError(
+            f"n={n} coordinates: gausspp builds a mechanism's equations symbolically and takes at most "
+            f"{MAX_COORDINATES} coordinates"
+        )
     return int(n)
 
 

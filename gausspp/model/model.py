@@ -34,7 +34,7 @@ from ..step.qp import QPBackend
 from ..step.realizability import symmetric_by_construction
 from ..step.results import ImpactResult, StepResult
 from ..step.sparse import choose_route
-from ..validation import positive
+from ..validation import flag, positive, short
 from .assembly import assemble, assemble_contacts
 from .constraints import Constraint, Unilateral
 from .mechanism import Mechanism
@@ -121,7 +121,8 @@ class Model:
         self.names = [n for _, n in bilateral]
         self.contacts: tuple[Unilateral, ...] = tuple(c for c, _ in unilateral)
         self.contact_names = [n for _, n in unilateral]
-        self.margin_warn, self.margin_error, self.refine = margin_warn, margin_error, bool(refine)
+        self.margin_warn, self.margin_error = margin_warn, margin_error
+        self.refine = flag("Model", "refine", refine)
         self.contact_tol = float(contact_tol)
         a = assemble(mechanism, self.constraints, self.names)
         self.expressions, self.inputs, self.k, self.m, self.n_lam = a.expressions, a.inputs, a.k, a.m, a.n_lam
@@ -130,7 +131,7 @@ class Model:
         self.route = choose_route(a.expressions, route)
         #: every reaction along its constraint's normal (D = Jᵀ): the normalized S is symmetric at every state
         self.symmetric_S = self.k == self.m and symmetric_by_construction(a.expressions.J, a.expressions.D)
-        self.codegen = bool(codegen)
+        self.codegen = flag("Model", "codegen", codegen)
         self.row_names, self.lam_columns, self.groups, self.group_bounds = (
             a.row_names,
             a.lam_columns,
@@ -243,7 +244,7 @@ class Model:
             ``margin_error``).
         NotPositiveDefiniteError, NonFiniteError, ShapeError, QPSolveError
         """
-        refine = self.refine if refine is None else bool(refine)
+        refine = self.refine if refine is None else refine if type(refine) is bool else flag("step", "refine", refine)
         fast = checked.checked_call(self, solver, backend, refine)
         if fast is not None:
             result = fast(t, q, v, lam)
@@ -368,3 +369,10 @@ def _state_vector(name: str, value: Any, size: int, t: float) -> np.ndarray:
     if not np.isfinite(arr.sum()):
         raise NonFiniteError(f"{name} contains NaN or inf at t={t:.6g}: {arr.tolist()}")
     return arr
+
+
+def model_argument(owner: str, model: Any) -> None:
+    """Refuse anything but a :class:`Model` as ``owner``'s model (a scene's name, a scene itself …)."""
+    if not isinstance(model, Model):
+        hint = " (a scene carries one: gp.scenes.get(name).model)"
+        raise InputError(f"{owner}: model must be a gp.Model{hint}, got {short(model)}")

@@ -32,6 +32,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, NonFiniteError, ShapeError, UnknownNameError
+from ..validation import array
 from .constraint_expressions import ConstraintExpressions
 from .symbolic import evaluate, require_affine_in
 
@@ -131,7 +132,7 @@ def _matrix(fn: Callable[..., Any], mech: Mechanism, k: int, what: str) -> ca.SX
 def _initial(lam0: Any) -> np.ndarray | None:
     if lam0 is None:
         return None
-    arr = np.atleast_1d(np.asarray(lam0, dtype=float))
+    arr = np.atleast_1d(array("realization", "lam0", lam0, finite=False))
     if arr.ndim != 1:
         raise ShapeError(f"lam0 must be a vector, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
@@ -178,11 +179,14 @@ class Force(Realization):
         if bounds is not None:
             if not isinstance(bounds, (tuple, list)) or len(bounds) != 2:
                 raise InputError(f"Force: bounds must be a pair (lo, hi), got {bounds!r}")
-            lo, hi = (np.atleast_1d(np.asarray(b, dtype=float)) for b in bounds)
+            lo, hi = (np.atleast_1d(array("Force", "bounds", b, finite=False)) for b in bounds)
             if np.any(np.isnan(lo)) or np.any(np.isnan(hi)):
                 raise NonFiniteError(f"Force: bounds contain NaN: {bounds!r}")
             if lo.ndim != 1 or hi.ndim != 1:
                 raise ShapeError(f"Force: bounds must be scalars or vectors, got shapes {lo.shape}, {hi.shape}")
+            crossed = np.broadcast_to(lo, np.broadcast_shapes(lo.shape, hi.shape)) > hi
+            if np.any(crossed):
+                raise InputError(f"Force: a lower bound exceeds its upper bound: bounds={bounds!r} (need lo ≤ hi)")
             self.bounds = (lo, hi)
             self.label = "force (bounded)"
 

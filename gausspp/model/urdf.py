@@ -18,6 +18,7 @@ symbols a constraint's function receives.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Sequence
 from importlib import metadata
 from typing import Any
@@ -25,6 +26,7 @@ from typing import Any
 import casadi as ca
 
 from ..errors import GaussppError, InputError, UnknownNameError
+from ..validation import number
 from .mechanism import MassMatrix
 from .symbolic import evaluate
 
@@ -110,7 +112,11 @@ def from_urdf(
     URDFMechanism
         A :class:`~gausspp.MassMatrix` with ``joint_names``.
     """
+    path = _checked_file(path)
     adam_robot = _robot_class()
+    g = number(f"from_urdf: g must be a finite number (gravity's magnitude, m/s²), got {g!r}", g)
+    if joints is not None and (isinstance(joints, str) or not all(isinstance(j, str) for j in joints)):
+        raise InputError(f"from_urdf: joints must be a list of joint names, got {joints!r}")
     movable = adam_robot.movable_joints(str(path))
     kinds = dict(movable)
     names = [name for name, kind in movable if kind in ONE_DOF] if joints is None else list(joints)
@@ -125,6 +131,25 @@ def from_urdf(
         raise InputError(f"from_urdf: {path} has no revolute, continuous or prismatic joint")
     robot = adam_robot.AdamRobot(str(path), names, float(g))
     return URDFMechanism(robot, names, g, torque)
+
+
+def _checked_file(path: Any) -> str:
+    """The URDF file, readable and well-formed XML, or an error naming it and what is wrong."""
+    import xml.etree.ElementTree as ET
+
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(f"from_urdf: path must be the name of a URDF file, got {path!r}")
+    if not os.path.isfile(path):
+        raise InputError(f"from_urdf: {str(path)!r}: no such file")
+    try:
+        root = ET.parse(path).getroot()
+    except ET.ParseError as exc:
+        raise InputError(f"from_urdf: {str(path)!r} is not well-formed XML ({exc})") from None
+    except OSError as exc:
+        raise InputError(f"from_urdf: cannot read {str(path)!r}: {exc.strerror or exc}") from None
+    if root.tag != "robot":
+        raise InputError(f"from_urdf: {str(path)!r} is not a URDF file (its root element is <{root.tag}>, not <robot>)")
+    return str(path)
 
 
 def _robot(mech: Any, frame: str) -> Any:

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import GaussppError, InputError, ShapeError
+from ..validation import short
 
 #: Line styles that tell runs apart when several are drawn on one axes (colours tell components).
 STYLES = ("-", "--", ":", "-.")
@@ -38,13 +39,20 @@ def palette(i: int) -> str:
     return OKABE_ITO[i % len(OKABE_ITO)]
 
 
-def as_runs(obj: Any, what: str) -> dict[str, Any]:
-    """One object or a mapping ``label → object`` as a dict (label ``""`` for a lone object)."""
+def as_runs(obj: Any, what: str, needs: tuple[str, ...] = ("t",)) -> dict[str, Any]:
+    """One object or a mapping ``label → object`` as a dict (label ``""`` for a lone object); each must have the
+    attributes ``needs`` (a trajectory's ``t``, ``q``, ``v`` …), else an error naming what was given."""
     if isinstance(obj, Mapping):
         if not obj:
             raise InputError(f"nothing to plot: the mapping of {what} is empty")
-        return {str(k): v for k, v in obj.items()}
-    return {"": obj}
+        runs = {str(k): v for k, v in obj.items()}
+    else:
+        runs = {"": obj}
+    for label, run in runs.items():
+        if not all(hasattr(run, name) for name in needs):
+            which = f" ({label!r})" if label else ""
+            raise InputError(f"{what}{which}: expected a result of gausspp (with {', '.join(needs)}), got {short(run)}")
+    return runs
 
 
 def labels(given: Sequence[str] | None, n: int, symbol: str) -> list[str]:

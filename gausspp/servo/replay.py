@@ -9,9 +9,11 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.interpolate import CubicSpline
 
-from ..model.model import Model
+from ..errors import InputError
+from ..model.model import Model, model_argument
 from ..step.bound import Bound
 from ..step.servo_reach import outputs
+from ..validation import positive, short
 from .route import ServoTrajectory
 
 
@@ -29,6 +31,11 @@ def replay(model: Model, traj: ServoTrajectory, rtol: float = 1e-12, atol: float
     """Integrate ``A v̇ = f + D u(t)``, ``q̇ = K(q, v, t)`` from the trajectory's first state with the forces
     ``u(t)`` interpolated (cubic splines through its samples) — no constraint, no feedback: if the forces are
     right, the motion follows the path by itself (up to the interpolation and the integration's errors)."""
+    model_argument("replay", model)
+    if not all(hasattr(traj, name) for name in ("t", "q", "v", "forces")):
+        raise InputError(f"replay: traj must be the ServoTrajectory of gp.simulate_servo, got {short(traj)}")
+    rtol = positive("rtol", rtol, hint=" (replay's relative tolerance)")
+    atol = positive("atol", atol, zero_ok=True, hint=" (replay's absolute tolerance)")
     p = model.expressions
     t, q, v, lam, stab = model.inputs
     u = ca.SX.sym("u", model.m)

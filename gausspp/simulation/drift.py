@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import casadi as ca
 
 from ..errors import InputError
+from ..validation import number
 
 if TYPE_CHECKING:
     from ..model.model import Model
@@ -37,12 +38,18 @@ class Baumgarte:
     beta: float = 0.0
 
     def __post_init__(self) -> None:
+        for name in ("alpha", "beta"):
+            value = getattr(self, name)
+            object.__setattr__(
+                self, name, number(f"Baumgarte: {name} must be a finite number ≥ 0, got {value!r}", value)
+            )
         if not (self.alpha >= 0 and self.beta >= 0):
             raise InputError(f"Baumgarte: alpha and beta must be ≥ 0, got {self.alpha}, {self.beta}")
 
     @classmethod
     def critical(cls, tau: float) -> Baumgarte:
         """Critically damped drift with time constant ``tau``."""
+        tau = number(f"Baumgarte.critical: tau must be a positive number, got {tau!r}", tau)
         if not tau > 0:
             raise InputError(f"Baumgarte.critical: tau must be positive, got {tau}")
         return cls(alpha=2.0 / tau, beta=1.0 / tau**2)

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, LongRunWarning, ShapeError
+from ..errors import InputError, IntegrationError, LongRunWarning, ShapeError
 from ..model.model import Model
 from ..validation import array, number, positive
 from . import lanes
@@ -185,3 +185,33 @@ def check_step_count(
             stacklevel=4,
         )
     return among
+
+
+#: An adaptive run forecasts its length from this many accepted steps (:func:`check_forecast`).
+FORECAST_AFTER = 200
+
+
+def check_forecast(method: str, t0: float, t_end: float, t: float, steps: int, width: int, kept: int) -> None:
+    """An adaptive run's length forecast from its first ``steps`` accepted steps (to ``t``): refused (an
+    :class:`~gausspp.IntegrationError`, what was computed kept) above :data:`MAX_STEPS` steps or when the ``kept``
+    states so far, extrapolated, would exceed :data:`MAX_KEPT_BYTES` (``width`` bytes each); announced
+    (:class:`~gausspp.LongRunWarning`) above :data:`LONG_RUN_STEPS`."""
+    if not t > t0:
+        return
+    scale = (t_end - t0) / (t - t0)
+    total, states = steps * scale, kept * scale
+    what = f"{method} took {steps} steps to t={t:.6g}: to t_end={t_end:.6g} that is about {total:.3g} steps"
+    if total > MAX_STEPS:
+        raise IntegrationError(
+            f"{what}, more than the {MAX_STEPS:.0e} a run may take (days of computing): shorten t_end, loosen "
+            "rtol/atol, or check the model (a very stiff or singular motion takes tiny steps)"
+        )
+    if states * width > MAX_KEPT_BYTES:
+        raise IntegrationError(
+            f"{what}, keeping {states:.3g} states ({states * width / 2**30:.3g} GiB, more than "
+            f"{MAX_KEPT_BYTES / 2**30:g} GiB): record fewer (record=times) or shorten t_end"
+        )
+    if total > LONG_RUN_STEPS:
+        warnings.warn(
+            f"{what}: this run will take long; shorten t_end or loosen rtol/atol", LongRunWarning, stacklevel=5
+        )

@@ -128,6 +128,12 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
             )
             break
         steps += 1
+        if steps == inputs.FORECAST_AFTER:  # a horizon of days is refused, one of hours announced
+            try:
+                inputs.check_forecast(meth.name, t0, opts.t_end, solver.t, steps, 8 * y0.size, len(ts))
+            except GaussppError as exc:
+                failure = exc
+                break
         if times is None:
             ts.append(solver.t)
             ys.append(solver.y.copy())

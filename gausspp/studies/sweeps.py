@@ -51,6 +51,7 @@ import math
 import os
 import sys
 import time
+import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
 from dataclasses import dataclass
@@ -58,7 +59,8 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ..errors import InputError, UnknownNameError
+from ..errors import InputError, SweepWarning, UnknownNameError
+from ..validation import flag
 from .realizability_map import servo_margin
 from .scene_cache import cached_scene
 from .sweep_engine import Progress, Task, checked_executor, run_tasks
@@ -94,7 +96,7 @@ def grid(**axes: Iterable[Any]) -> list[dict[str, Any]]:
     names = list(axes)
     values = []
     for name, axis in axes.items():
-        if not isinstance(axis, Iterable):
+        if not isinstance(axis, Iterable) or isinstance(axis, (str, bytes, dict)):
             raise InputError(f"grid axis {name}={axis!r} must be a list of values, e.g. {name}=[{axis!r}]")
         values.append(list(axis))
     return [dict(zip(names, combo, strict=True)) for combo in itertools.product(*values)]
@@ -288,6 +290,8 @@ def sweep(
     SweepResult
     """
     start = time.perf_counter()
+    progress = flag("sweep", "progress", progress)
+    retry_failed = flag("sweep", "retry_failed", retry_failed)
     task = _resolve_task(fn_or_scene)
     plist = _param_list(params)
     keys = [canonical_json(p, f"params[{i}]") for i, p in enumerate(plist)]
@@ -315,6 +319,14 @@ def sweep(
     )
     if npz is not None:
         res.to_npz(npz)
+    if plist and len(res.errors) == len(plist):
+        first = next(iter(res.errors.values()))
+        warnings.warn(
+            f"every one of the {len(plist)} tasks failed (the first: {first.strip().splitlines()[-1][:200]}); "
+            "SweepResult.errors holds each error — check the task and its parameters on one point first",
+            SweepWarning,
+            stacklevel=2,
+        )
     return res
 
 

@@ -27,7 +27,9 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, NonFiniteError, NotPositiveDefiniteError, QPSolveError
+from ..model.model import model_argument
 from ..step import qp
+from ..validation import positive
 
 #: Backends tried in this order for the reference (declared in the registry): exact dense active-set codes first.
 REFERENCE_BACKENDS = qp.REFERENCE_DEFAULTS
@@ -191,6 +193,8 @@ def crosscheck(
     constraint rows). Models with contacts or bounded actuators are not covered (their step has
     inequalities): an :class:`InputError`.
     """
+    model_argument("crosscheck", model)
+    tolerance = positive("tolerance", tolerance, hint=" (the relative agreement asked of the routes, e.g. 1e-9)")
     if model.contacts or model.bounded:
         raise InputError("crosscheck covers the equality step; this model has contacts or bounded actuators")
     # the model's own answers first: they raise the clear project errors (unrealizable, not positive definite)

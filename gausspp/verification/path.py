@@ -108,6 +108,9 @@ def discretize(
     on them (:func:`evaluate`).
     """
     check_model(model)
+    constraint_tol = positive(
+        "constraint_tol", constraint_tol, zero_ok=True, hint=" (how far the path may be off the constraint)"
+    )
     if nodes is not None:
         nodes = positive("nodes", nodes, integer=True, hint=" (uniform nodes in the window, at least 5)")
     t, q, v, a = checked_samples(model, trajectory)

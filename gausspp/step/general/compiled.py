@@ -45,6 +45,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ...c_code import c_function
 from ..bound import Bound
 from ..protocol import StepModel
 from ..qp import QPBackend, short_name
@@ -376,6 +377,8 @@ class GeneralCall:
             fn = ca.Function("general_step_sparse", model.inputs, [ca.cse(o) for o in outs])
         else:
             fn = self._function(model, pat, backend, consistency_tol)
+        if getattr(model, "codegen", False) and fn.is_a("SXFunction"):  # as C where a compiler is (c_code)
+            fn = c_function(fn) or fn
         self._bound = Bound(fn)
         self._args = self._bound.args
         self._out = self._bound.res[0]
