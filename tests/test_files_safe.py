@@ -139,3 +139,23 @@ def test_acceleration_qp_accepts_zero_entries_that_carry_round_off() -> None:
     A[0, 1] += 1e-6 * np.abs(A).max()
     with pytest.raises(gp.NotPositiveDefiniteError, match="not symmetric"):
         gp.acceleration_qp(A, a0, J, phi, J.T)
+
+
+def test_the_command_line_ends_quietly_when_its_reader_goes_and_refuses_an_animation_path_first(
+    tmp_path: Path,
+) -> None:
+    piped = subprocess.run(
+        f"{sys.executable} -m gausspp.cli scenes | head -1", shell=True, capture_output=True, text=True, timeout=300
+    )
+    assert piped.returncode == 0 and len(piped.stdout.splitlines()) == 1
+    assert "Error" not in piped.stderr and "Traceback" not in piped.stderr
+    a_file = tmp_path / "afile"
+    a_file.write_text("x")
+    done = subprocess.run(
+        [sys.executable, "-m", "gausspp.cli", "run", "pendulum", "--t-end", "0.05", "--animate", str(a_file / "a.gif")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert done.returncode == 1 and "is a file, not a directory" in done.stderr
+    assert done.stdout == ""  # refused before the run: no summary printed

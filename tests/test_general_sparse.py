@@ -16,7 +16,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gausspp as gp
-from gausspp import scenes
+from gausspp import c_code, scenes
 from gausspp.scenes import parallelogram
 from gausspp.step.data import NO_STAB
 from gausspp.step.general import general_step, sparse_pattern
@@ -139,3 +139,16 @@ def test_the_sparse_route_changes_no_trajectory(monkeypatch: pytest.MonkeyPatch)
     theta, omega = parallelogram.one_dof_reference(times, **sc.params)
     ref = np.array([parallelogram.maximal_state(a, b, 0.0, CELLS, True)[0] for a, b in zip(theta, omega, strict=True)])
     assert np.abs(sparse.q - ref).max() < 1e-9
+
+
+@pytest.mark.skipif(c_code.compiler() is None, reason="no C compiler")
+def test_the_general_step_generated_as_c_answers_as_the_virtual_machine() -> None:
+    """Model(codegen=True): the compiled general call runs as C (c_code), with the same answer."""
+    sc = scenes.get("parallelogram", third_bar=True)
+    model = gp.Model(sc.model.mechanism, list(sc.model.constraints), codegen=True)
+    result = model.step(0.0, sc.q0, sc.v0)
+    call = general_step.current_call(model, None, None, CONSISTENCY_TOL)
+    assert call is not None and not call.function.is_a("SXFunction")  # the external C library's function
+    again = model.step(0.0, sc.q0, sc.v0)  # through the C call
+    reference = sc.model.step(0.0, sc.q0, sc.v0)
+    assert again.disagreement(reference) < 1e-12 and result.disagreement(reference) < 1e-12

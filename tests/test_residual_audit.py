@@ -73,3 +73,16 @@ def test_drift_tol_is_checked(bad: object) -> None:
     scene = gp.scenes.get("pendulum")
     with pytest.raises(gp.InputError, match="drift_tol"):
         gp.simulate(scene.model, scene.q0, scene.v0, 1.0, drift_tol=bad)  # type: ignore[arg-type]
+
+
+def test_a_failed_run_with_record_times_keeps_the_last_state_it_reached() -> None:
+    """The crane through its vertical rope (the margin vanishes at t ≈ 0.0954): DOP853 stops there. With record
+    times every 0.05 s the failed run keeps the times it passed and the last state it reached, not t = 0 alone."""
+    f = gp.scenes.get("crane", theta0=-0.3, accel=0.0, distance=0.0)
+    with pytest.warns(gp.RealizabilityWarning, match="margin .* is small"):  # the last state is near the loss
+        traj = gp.simulate(f.model, f.q0, f.v0, 0.2, throw=False, record=np.linspace(0.0, 0.2, 5))
+    assert traj.status == "failed" and isinstance(traj.failure, gp.IntegrationError)
+    assert "try a stiff method (Radau" in traj.message  # DOP853 failed: a stiff method is advice
+    stopped = float(traj.message.split("stopped at t=")[1].split(":")[0])
+    np.testing.assert_allclose(traj.t[:2], [0.0, 0.05])
+    assert traj.t.size == 3 and abs(traj.t[-1] - stopped) < 1e-6 * max(1.0, stopped)

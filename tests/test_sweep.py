@@ -61,7 +61,12 @@ def _simulate_params() -> list[dict[str, Any]]:
 
 
 def test_grid_is_the_cartesian_product_in_order() -> None:
-    assert grid(a=[1, 2], b=["x", "y"]) == [{"a": 1, "b": "x"}, {"a": 1, "b": "y"}, {"a": 2, "b": "x"}, {"a": 2, "b": "y"}]
+    assert grid(a=[1, 2], b=["x", "y"]) == [
+        {"a": 1, "b": "x"},
+        {"a": 1, "b": "y"},
+        {"a": 2, "b": "x"},
+        {"a": 2, "b": "y"},
+    ]
 
 
 @pytest.mark.parametrize("task, make", [(realizability_task, _realizability_params), (simulate_task, _simulate_params)])

@@ -12,6 +12,7 @@ compute and print comes from :mod:`gausspp.studies`.
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Callable, Sequence
 
@@ -68,6 +69,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print("gausspp: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:  # the reader went away (`gausspp scenes | head`): nothing more to say, to anyone
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # no second error when Python flushes
+        return EXIT_OK
+    except OSError as exc:  # a file or a directory the command could not write: what and where, no traceback
+        if args.debug:
+            raise
+        where = f" {exc.filename!r}" if exc.filename else ""
+        print(f"gausspp: error: cannot write{where}: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_ERROR
     except Exception as exc:  # not foreseen by the library: still one line, the traceback with --debug
         if args.debug:
             raise

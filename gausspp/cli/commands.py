@@ -164,6 +164,7 @@ def run(args: argparse.Namespace) -> int:
     animation = args.animate
     if animation is not None:
         plot.animation.drawing_of(scene)  # refused before the run, not after
+        output.check_file_target(Path(animation), "--animate")
     if args.out is not None:
         output.check_out(Path(args.out), scene.name)  # a path that cannot be written is refused before the run
     traj, wall, dt = _simulate(args, scene, f"simulating {args.scene}")

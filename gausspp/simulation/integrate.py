@@ -122,9 +122,10 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
             failure = exc
             break
         if solver.status == "failed":
+            stiff = "" if meth.name in ("Radau", "BDF") else ", or try a stiff method (Radau, BDF, cvodes)"
             failure = IntegrationError(
                 f"{meth.name} stopped at t={solver.t:.6g}: {message}; near a singular or very stiff state — "
-                "check the realizability margin there, loosen rtol/atol, or try a stiff method"
+                f"check the realizability margin there, loosen rtol/atol{stiff}"
             )
             break
         steps += 1
@@ -143,6 +144,9 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
                 ts.append(float(tk))
                 ys.append(np.asarray(dense(tk)))
         t_prev = solver.t
+    if failure is not None and times is not None and (not ts or solver.t > ts[-1]):
+        ts.append(float(solver.t))  # a failed run keeps the last state it reached, between the record times
+        ys.append(np.asarray(solver.y).copy())
     y = np.array(ys).reshape(len(ts), y0.size)
     return Samples(np.array(ts), y, steps, rhs.evaluations, failure, meth.name, rhs.solver)
 

@@ -47,10 +47,7 @@ def check_out(out: Path, scene_name: str) -> None:
     ``.npz``/``.nc`` that is not a saved trajectory, an existing CSV that is not one written here."""
     suffix = out.suffix.lower()
     if suffix in FIGURE_SUFFIXES:
-        if out.is_dir():
-            raise GaussppError(f"--out {str(out)!r} is a directory, not a figure file")
-        if out.parent.exists() and not out.parent.is_dir():
-            raise GaussppError(f"--out {str(out)!r}: {str(out.parent)!r} is a file, not a directory")
+        check_file_target(out, "--out")
         return
     if suffix in FILE_SUFFIXES:
         targets = [out]
@@ -72,6 +69,18 @@ def check_out(out: Path, scene_name: str) -> None:
                 f"--out {str(out)!r}: {str(target)!r} exists and is not gausspp's output; choose another --out, or "
                 "move that file"
             )
+
+
+def check_file_target(path: Path, option: str) -> None:
+    """Refuse, before the run, a file name whose folder cannot hold it (a regular file on the way) or that names
+    a directory (``option``: the command-line option, for the message)."""
+    if path.is_dir():
+        raise GaussppError(f"{option} {str(path)!r} is a directory, not a file name")
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise GaussppError(f"{option} {str(path)!r}: {str(parent)!r} is a file, not a directory")
+            break
 
 
 def _is_our_csv(path: Path) -> bool:
