@@ -159,3 +159,35 @@ def test_the_command_line_ends_quietly_when_its_reader_goes_and_refuses_an_anima
     )
     assert done.returncode == 1 and "is a file, not a directory" in done.stderr
     assert done.stdout == ""  # refused before the run: no summary printed
+
+
+def _dies_once(p: dict) -> dict:
+    """The task of x = 3 kills its worker process the first time it runs (a marker file says it did)."""
+    import os
+    import signal
+
+    marker = Path(p["marker"])
+    if p["x"] == 3 and not marker.exists():
+        marker.write_text("killed")
+        os.kill(os.getpid(), signal.SIGKILL)
+    return {"y": p["x"] ** 2}
+
+
+def test_a_sweep_survives_a_killed_worker_on_the_local_pool_and_says_where_it_stands_on_a_given_one(
+    tmp_path: Path,
+) -> None:
+    """Issue 28, item 5: the local pool restarts and finishes (every result right); a pool the caller passed ends
+    in a SweepError counting what is done, and the same call with out= resumes the rest."""
+    from concurrent.futures import ProcessPoolExecutor
+
+    params = grid(x=list(range(8)), marker=[str(tmp_path / "local")])
+    local = gp.sweep(_dies_once, params, chunk=1, progress=False)
+    assert (tmp_path / "local").exists()  # a worker was killed
+    assert [r["y"] for r in local.results] == [x**2 for x in range(8)] and not local.errors
+    params = grid(x=list(range(8)), marker=[str(tmp_path / "given")])
+    log = tmp_path / "sweep.jsonl"
+    with ProcessPoolExecutor(2) as pool:
+        with pytest.raises(SweepError, match=r"a worker process died \(the executor passed in\): \d of 8 tasks are"):
+            gp.sweep(_dies_once, params, executor=pool, chunk=1, out=log, progress=False)
+    resumed = gp.sweep(_dies_once, params, executor="serial", out=log, progress=False)
+    assert [r["y"] for r in resumed.results] == [x**2 for x in range(8)] and not resumed.errors

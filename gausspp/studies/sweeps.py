@@ -54,6 +54,7 @@ import time
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -301,13 +302,9 @@ def sweep(
     results, errors, todo = resume(path, keys, name, retry_failed)
     sink = open_log(path, name)
     collect = Collector(plist, results, errors, sink, Progress(len(todo), sys.stderr if progress else None))
-    owned = executor is None and len(todo) > 0
-    pool: Executor | str | None = ProcessPoolExecutor(max_workers=os.cpu_count()) if owned else executor
     try:
-        run_tasks(task, plist, todo, pool, chunk, collect)
+        _run_surviving(task, plist, todo, executor, chunk, collect, results, errors)
     finally:
-        if owned and isinstance(pool, Executor):
-            pool.shutdown(wait=True, cancel_futures=True)
         if sink is not None:
             sink.close()
     res = SweepResult(
@@ -328,6 +325,47 @@ def sweep(
             stacklevel=2,
         )
     return res
+
+
+#: How many times a local pool whose worker died is restarted within one sweep before the sweep gives up.
+POOL_RESTARTS = 3
+
+
+def _run_surviving(
+    task: Task,
+    plist: list[dict[str, Any]],
+    todo: list[int],
+    executor: Executor | str | None,
+    chunk: int | None,
+    collect: Collector,
+    results: list[dict[str, Any] | None],
+    errors: dict[int, str],
+) -> None:
+    """:func:`run_tasks`; the local pool (``executor=None``) restarted when a worker dies (killed, out of memory)
+    and the tasks not yet collected sent again, up to :data:`POOL_RESTARTS` times. A pool the caller passed, or one
+    that keeps dying, ends the sweep in a :class:`SweepError` that says how many tasks are done (recorded in
+    ``out``, if given) and that the same call resumes."""
+    owned, restarts = executor is None, 0
+    while True:
+        remaining = [i for i in todo if results[i] is None and i not in errors]
+        if not remaining:
+            return
+        pool: Executor | str | None = ProcessPoolExecutor(max_workers=os.cpu_count()) if owned else executor
+        try:
+            run_tasks(task, plist, remaining, pool, chunk, collect)
+            return
+        except BrokenProcessPool as exc:
+            restarts += 1
+            done = sum(1 for i in todo if results[i] is not None or i in errors)
+            if not owned or restarts > POOL_RESTARTS:
+                given = "the executor passed in" if not owned else f"the local pool, {POOL_RESTARTS} restarts"
+                raise SweepError(
+                    f"a worker process died ({given}): {done} of {len(todo)} tasks are done and recorded; the "
+                    "same call (with out=) resumes the others"
+                ) from exc
+        finally:
+            if owned and isinstance(pool, Executor):
+                pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _param_list(params: Any) -> list[dict[str, Any]]:
