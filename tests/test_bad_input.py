@@ -882,3 +882,40 @@ def test_an_adaptive_run_of_days_is_refused_from_its_first_steps_keeping_them() 
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # the control: a short run is neither refused nor announced
         inputs.check_forecast("DOP853", 0.0, 5.0, 2.0, 200, 8, 200)
+
+
+def test_a_urdf_link_of_negative_mass_and_string_gravity_are_refused(tmp_path: Path) -> None:
+    robot = tmp_path / "arm.urdf"
+    robot.write_text(
+        "<robot name='arm'><link name='base'/><link name='upper'><inertial><mass value='-1.0'/>"
+        "<inertia ixx='1' iyy='1' izz='1' ixy='0' ixz='0' iyz='0'/></inertial></link>"
+        "<joint name='shoulder' type='revolute'><parent link='base'/><child link='upper'/><axis xyz='0 0 1'/>"
+        "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint></robot>"
+    )
+    with pytest.raises(gp.InputError, match=r"link 'upper' of .*arm.urdf' has mass '-1.0'"):
+        gp.from_urdf(str(robot))
+    robot.write_text(robot.read_text().replace("-1.0", "2.0"))
+    with pytest.raises(gp.InputError, match=r"g must be a finite number .*'9.81x'"):
+        gp.from_urdf(str(robot), g="9.81x")  # type: ignore[arg-type]
+
+
+def test_an_inertia_no_body_has_is_refused() -> None:
+    with pytest.raises(gp.InputError, match=r"violate the triangle inequality"):
+        gp.RigidBody(np.diag([1.0, 1.0, 3.0]))
+    gp.RigidBody(np.diag([1.0, 1.0, 2.0]))  # the control: a thin disc (I₃ = I₁ + I₂) is a body
+
+
+def test_from_sympy_names_a_parameter_that_is_no_number() -> None:
+    sympy = pytest.importorskip("sympy")
+    me = pytest.importorskip("sympy.physics.mechanics")
+    q, u = me.dynamicsymbols("q u")
+    m, g = sympy.symbols("m g")
+    frame = me.ReferenceFrame("N")
+    point = me.Point("O")
+    point.set_vel(frame, 0)
+    particle_point = point.locatenew("P", q * frame.x)
+    particle_point.set_vel(frame, u * frame.x)
+    kane = me.KanesMethod(frame, q_ind=[q], u_ind=[u], kd_eqs=[q.diff() - u])
+    kane.kanes_equations([me.Particle("p", particle_point, m)], [(particle_point, -m * g * frame.x)])
+    with pytest.raises(gp.InputError, match=r"parameter m must be a finite number, got 'one'"):
+        gp.from_sympy(kane, parameters={m: "one", g: 9.81})

@@ -191,3 +191,16 @@ def test_a_sweep_survives_a_killed_worker_on_the_local_pool_and_says_where_it_st
             gp.sweep(_dies_once, params, executor=pool, chunk=1, out=log, progress=False)
     resumed = gp.sweep(_dies_once, params, executor="serial", out=log, progress=False)
     assert [r["y"] for r in resumed.results] == [x**2 for x in range(8)] and not resumed.errors
+
+
+def test_a_sweep_on_a_dask_cluster_survives_a_killed_worker(tmp_path: Path) -> None:
+    """The other executor: dask's nanny restarts the killed worker and the scheduler runs its task again."""
+    distributed = pytest.importorskip("distributed", reason="dask[distributed] is not installed (pip install .[dask])")
+    params = grid(x=list(range(8)), marker=[str(tmp_path / "dask")])
+    with (
+        distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        result = gp.sweep(_dies_once, params, executor=client, chunk=1, progress=False)
+    assert (tmp_path / "dask").exists()  # a worker was killed
+    assert [r["y"] for r in result.results] == [x**2 for x in range(8)] and not result.errors

@@ -27,6 +27,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import BackendUnavailableError, InputError
+from ..validation import number
 from .constraints import Constraint, Holonomic
 from .mechanism import MassMatrix
 from .model import Model
@@ -108,7 +109,12 @@ def from_sympy(
     """
     me = _sympy_mechanics()
     parts = _parts(source, me)
-    values = {symbol: float(value) for symbol, value in (parameters or {}).items()}
+    if parameters is not None and not isinstance(parameters, Mapping):
+        raise InputError(f"from_sympy: parameters must map symbols to numbers, got {type(parameters).__name__}")
+    values = {
+        symbol: number(f"from_sympy: parameter {symbol} must be a finite number, got {value!r}", value)
+        for symbol, value in (parameters or {}).items()
+    }
     mechanism = _mechanism(parts, values, me)
     names = tuple(str(getattr(qi, "func", qi)) for qi in parts.q)
     mechanism.coordinate_names, mechanism.velocity_names = names, tuple(parts.speed_names)  # names in results

@@ -270,6 +270,12 @@ class RigidBody(Mechanism):
                 f"inertia must be positive definite, eigenvalues {np.linalg.eigvalsh(I).tolist()}; "
                 "check its sign and units"
             )
+        principal = np.linalg.eigvalsh(I)
+        if principal[2] > (principal[0] + principal[1]) * (1 + 1e-9):  # a body's moments: I₃ ≤ I₁ + I₂
+            raise InputError(
+                f"inertia's principal moments {principal.tolist()} violate the triangle inequality (the largest "
+                "exceeds the sum of the others): no body has them; check the matrix"
+            )
         self.inertia = I
         self._symbols(4, 3)
         q, w, t = self.q, self.v, self.t

@@ -149,6 +149,18 @@ def _checked_file(path: Any) -> str:
         raise InputError(f"from_urdf: cannot read {str(path)!r}: {exc.strerror or exc}") from None
     if root.tag != "robot":
         raise InputError(f"from_urdf: {str(path)!r} is not a URDF file (its root element is <{root.tag}>, not <robot>)")
+    for link in root.iter("link"):
+        for mass in link.iter("mass"):
+            text = mass.get("value")
+            try:
+                value = float(text) if text is not None else float("nan")
+            except ValueError:
+                value = float("nan")
+            if not value >= 0 or value == float("inf"):  # 0 is a frame's massless link
+                raise InputError(
+                    f"from_urdf: link {link.get('name')!r} of {str(path)!r} has mass {text!r}; a link's mass must be "
+                    "a non-negative number (kg)"
+                )
     return str(path)
 
 
