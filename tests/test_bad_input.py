@@ -20,6 +20,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import casadi as ca
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
@@ -919,3 +920,21 @@ def test_from_sympy_names_a_parameter_that_is_no_number() -> None:
     kane.kanes_equations([me.Particle("p", particle_point, m)], [(particle_point, -m * g * frame.x)])
     with pytest.raises(gp.InputError, match=r"parameter m must be a finite number, got 'one'"):
         gp.from_sympy(kane, parameters={m: "one", g: 9.81})
+
+
+def test_dependent_ideal_rows_are_told_apart_from_dependent_reaction_directions() -> None:
+    """Ideal rows that lose rank (a redundant loop equation, or a linkage's bars in line) get advice about rows and
+    singular positions; two forces along one direction keeping independent rows get the realizations' advice."""
+    redundant = gp.scenes.get("four-bar-redundant")
+    with pytest.raises(gp.RealizabilityError, match=r"not together .*rows are dependent here .*solver='qp' steps them"):
+        redundant.model.step(0.0, redundant.q0, redundant.v0, solver="direct")
+    push = gp.Force(lambda q, v, t: ca.DM([[1.0, 1.0]]))
+    model = gp.Model(
+        body(),
+        [
+            gp.Constraint(lambda q, v, t: v[0] - 1.0, name="a", realization=push),
+            gp.Constraint(lambda q, v, t: v[1], name="b", realization=push),
+        ],
+    )
+    with pytest.raises(gp.RealizabilityError, match=r"not together .*change one of the realizations"):
+        model.step(0.0, np.zeros(2), np.array([1.0, 0.0]), solver="direct")

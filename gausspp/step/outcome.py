@@ -86,10 +86,18 @@ def _unrealizable(
             margin=worst_margin,
         )
     names = ", ".join(repr(g.name) for g in groups)
+    ideal = data.D.shape == data.J.T.shape and np.allclose(data.D, data.J.T, rtol=1e-12, atol=0.0)
+    why = (
+        "their constraint rows are dependent here (the reactions are along them): either redundant rows, dependent "
+        "everywhere — solver='qp' steps them, as gp.simulate does when it finds them at the start — or a singular "
+        "position of the mechanism (a linkage's bars in line), which a run cannot yet step through"
+        if ideal
+        else "their constraint rows or their reaction directions are dependent — remove a redundant constraint, or "
+        "change one of the realizations"
+    )
     return RealizabilityError(
         f"constraints {names} are each realizable but not together {_where(t)}: margin {margin:.3g} "
-        "(J A⁻¹ D is singular): their constraint rows or their reaction directions are dependent — remove a "
-        "redundant constraint, or change one of the realizations",
+        f"(J A⁻¹ D is singular): {why}",
         t=t,
         constraint=names,
         margin=margin,
