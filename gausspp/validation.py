@@ -76,9 +76,3 @@ def flag(owner: str, name: str, value: Any) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise InputError(f"{owner}: {name} must be True or False, got {short(value)}")
     return bool(value)
-
-
-def instance(owner: str, name: str, value: Any, kind: type, what: str) -> None:
-    """Refuse a ``value`` that is not a ``kind`` (``what`` says what is expected, with an example)."""
-    if not isinstance(value, kind):
-        raise InputError(f"{owner}: {name} must be {what}, got {short(value)}")

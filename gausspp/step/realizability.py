@@ -28,6 +28,25 @@ from . import dense
 MARGIN_BOUND_ROWS = 8
 
 
+def normalized_S(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> np.ndarray:
+    """``S = J A⁻¹ D`` with each row of ``J`` and each column of ``D`` normalized in ``A⁻¹`` (one factorization of
+    ``A``); a zero row or column gives a non-finite row or column."""
+    A, J, D = (np.atleast_2d(np.asarray(x, float)) for x in (A, J, D))
+    solved = np.linalg.solve(A, np.hstack([D, J.T]))
+    AinvD, AinvJt = solved[:, : D.shape[1]], solved[:, D.shape[1] :]
+    row = np.sqrt(np.einsum("ij,ji->i", J, AinvJt))
+    col = np.sqrt(np.einsum("ij,ij->j", D, AinvD))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return (J @ AinvD) / np.outer(row, col)
+
+
+def _singular_values(S: np.ndarray) -> np.ndarray:
+    """Largest first; zeros where ``S`` has a non-finite entry (nothing to keep or nothing to push with)."""
+    if not np.all(np.isfinite(S)):
+        return np.zeros(min(S.shape))
+    return np.linalg.svd(S, compute_uv=False)
+
+
 def cosines(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> np.ndarray:
     """Singular values of ``S = J A⁻¹ D`` with rows of ``J`` and columns of ``D`` normalized in ``A⁻¹``.
 
@@ -41,34 +60,14 @@ def cosines(A: np.ndarray, J: np.ndarray, D: np.ndarray) -> np.ndarray:
     -------
     (min(k, m),) array, largest first (cosines of angles for one constraint).
     """
-    A, J, D = (np.atleast_2d(np.asarray(x, float)) for x in (A, J, D))
-    AinvD, AinvJt = np.linalg.solve(A, D), np.linalg.solve(A, J.T)
-    row = np.sqrt(np.einsum("ij,ji->i", J, AinvJt))
-    col = np.sqrt(np.einsum("ij,ij->j", D, AinvD))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        S = (J @ AinvD) / np.outer(row, col)
-    if not np.all(np.isfinite(S)):  # a zero row or column: nothing to keep or nothing to push with
-        return np.zeros(min(J.shape[0], D.shape[1]))
-    return np.linalg.svd(S, compute_uv=False)
+    return _singular_values(normalized_S(A, J, D))
 
 
 def group_margins(A: np.ndarray, J: np.ndarray, D: np.ndarray, blocks: list[tuple[slice, slice]]) -> list[float]:
     """:func:`margin` of each block ``(rows, cols)`` of ``J`` and ``D`` alone, on one factorization of ``A``: a
     block's normalized ``S`` is the block of the whole one (each row and column normalized by itself)."""
-    A, J, D = (np.atleast_2d(np.asarray(x, float)) for x in (A, J, D))
-    solved = np.linalg.solve(A, np.hstack([D, J.T]))
-    AinvD, AinvJt = solved[:, : D.shape[1]], solved[:, D.shape[1] :]
-    row = np.sqrt(np.einsum("ij,ji->i", J, AinvJt))
-    col = np.sqrt(np.einsum("ij,ij->j", D, AinvD))
-    out = []
-    for rows, cols in blocks:
-        Jb = J[rows]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            S = (Jb @ AinvD[:, cols]) / np.outer(row[rows], col[cols])
-        k, m = S.shape
-        cos = np.linalg.svd(S, compute_uv=False) if np.all(np.isfinite(S)) else np.zeros(min(k, m))
-        out.append(margin_of(cos, k, m))
-    return out
+    S = normalized_S(A, J, D)
+    return [margin_of(_singular_values(S[rows, cols]), *S[rows, cols].shape) for rows, cols in blocks]
 
 
 def margin_of(cos: np.ndarray, k: int, m: int) -> float:

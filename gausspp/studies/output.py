@@ -46,20 +46,16 @@ def check_out(out: Path, scene_name: str) -> None:
     gausspp's output: a file where a directory is meant, a directory where a file is meant, an existing
     ``.npz``/``.nc`` that is not a saved trajectory, an existing CSV that is not one written here."""
     suffix = out.suffix.lower()
-    if suffix in FIGURE_SUFFIXES:
+    if suffix in FIGURE_SUFFIXES or suffix in FILE_SUFFIXES:
         check_file_target(out, "--out")
-        return
-    if suffix in FILE_SUFFIXES:
+        if suffix in FIGURE_SUFFIXES:
+            return
         targets = [out]
     elif out.exists() and not out.is_dir():
         raise GaussppError(f"--out {str(out)!r} is a file: give a directory (or a .npz, .nc or figure file name)")
     else:
+        check_file_target(out, "--out", directory=True)
         targets = [out / f"{scene_name}.npz", out / f"{scene_name}.csv"]
-    for parent in out.parents:
-        if parent.exists():
-            if not parent.is_dir():
-                raise GaussppError(f"--out {str(out)!r}: {str(parent)!r} is a file, not a directory")
-            break
     for target in targets:
         if target.is_dir():
             raise GaussppError(f"--out {str(out)!r}: {str(target)!r} is a directory")
@@ -71,10 +67,10 @@ def check_out(out: Path, scene_name: str) -> None:
             )
 
 
-def check_file_target(path: Path, option: str) -> None:
-    """Refuse, before the run, a file name whose folder cannot hold it (a regular file on the way) or that names
-    a directory (``option``: the command-line option, for the message)."""
-    if path.is_dir():
+def check_file_target(path: Path, option: str, directory: bool = False) -> None:
+    """Refuse, before the run, a path whose folders cannot hold it (a regular file on the way), or a file name that
+    names a directory (``option``: the command-line option, for the message; ``directory``: ``path`` is one)."""
+    if path.is_dir() and not directory:
         raise GaussppError(f"{option} {str(path)!r} is a directory, not a file name")
     for parent in path.parents:
         if parent.exists():

@@ -37,6 +37,7 @@ import casadi as ca
 import numpy as np
 
 from ..protocol import StepModel
+from ..sparse import sparse_reduce
 from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
@@ -82,15 +83,13 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
     p, mech = model.expressions, model.mechanism
     k, K = model.k, list(kept)
     D_rows = [i for i in range(k) if i not in kept]
-    dA, LtA, pA = ca.ldl(ca.sparsify(p.A), True)
+    red = sparse_reduce(p)  # A's sparse LDLᵀ, a₀, A⁻¹f, A⁻¹Jᵀ (D = Jᵀ) and A's pivot, as the equality step's
 
     def solve_A(b: ca.SX) -> ca.SX:
-        return ca.sparsify(ca.ldl_solve(b, dA, LtA, pA))
+        return ca.sparsify(red.solve_A(b))
 
-    pivot_A = ca.mmin(ca.if_else(dA > 0, dA, -1)) / ca.mmax(ca.fabs(ca.diag(p.A)))
-    a_free, a0 = solve_A(p.f), solve_A(p.f + p.r0)
+    pivot_A, a_free, a0, AinvJt = red.pivot, red.a_free, red.a0, red.AinvD
     J = ca.sparsify(p.J)
-    AinvJt = solve_A(J.T)
     norms = ca.sqrt(ca.sum2(J * AinvJt.T))  # ‖Jᵢ‖ in A⁻¹
     norms = ca.if_else(norms > 0, norms, 1)
     Jn = ca.diag(1 / norms) @ J
