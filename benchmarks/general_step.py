@@ -136,6 +136,25 @@ def measure(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
             out["  error vs one-DOF reference (m) "] = float(np.abs(run.q - qref).max())
         except Exception as exc:  # a scene this revision does not have
             print(f"(spatial rows skipped: {type(exc).__name__}: {exc})", file=sys.stderr)
+        try:  # through the collinear positions, 10 s (gausspp.simulation.crossing; earlier revisions stop there)
+            import gausspp.simulation.crossing  # noqa: F401
+
+            for name, third in (("A02 parallelogram", False), ("double parallelogram", True)):
+                sc = scenes.get("parallelogram", third_bar=third)
+                for label, tol in (("defaults", {}), ("rtol=atol=1e-12", dict(rtol=1e-12, atol=1e-12))):
+                    run = gp.simulate(sc.model, sc.q0, sc.v0, 10.0, **tol)
+                    theta, omega = P.one_dof_reference(run.t, **sc.params)
+                    pairs = zip(theta, omega, strict=True)
+                    qref = np.array([P.maximal_state(a, b, 0.0, 1, third)[0] for a, b in pairs])
+                    key = f"{name} 10 s, {label}"
+                    again = lambda sc=sc, tol=tol: gp.simulate(sc.model, sc.q0, sc.v0, 10.0, **tol)  # noqa: E731
+                    out[f"{key} (ms)"] = _best_ms(again, 2)
+                    out[f"  collinear positions crossed, {key}"] = float(len(run.events))
+                    out[f"  error vs one-DOF reference (m), {key}"] = float(np.abs(run.q - qref).max())
+                    energy = run.energy
+                    out[f"  energy drift (relative), {key}"] = float(np.ptp(energy) / np.abs(energy).max())
+        except ImportError:
+            pass
         for n in ladder_sizes:
             ladder = scenes.get("parallelogram", cells=n, third_bar=True)
             m = ladder.model

@@ -238,7 +238,7 @@ def test_cvodes_runs_a_bounded_model_and_bdf_hands_it_to_dop853() -> None:
 def test_double_parallelogram_passes_its_first_collinear_position_on_its_branch() -> None:
     """Rows redundant everywhere plus a rank drop at the first collinear position (t ≈ 0.714 s): the run stays on
     the parallelogram branch (the one-DOF reference), where the anti-parallelogram branch would part from it.
-    (The second, at t ≈ 1.228 s, still stops the run: the closing note of issue 27 says where it stands.)"""
+    (The adaptive lane's crossings over 10 s: tests/test_singular_crossing.py.)"""
     from gausspp.scenes import parallelogram as P
 
     sc = scenes.get("parallelogram", third_bar=True)

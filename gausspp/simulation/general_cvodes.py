@@ -83,6 +83,7 @@ def run_general_cvodes(
         rest.failure,
         o.method.name,
         rhs.solver,
+        events=rest.events,
     )
 
 

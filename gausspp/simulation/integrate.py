@@ -15,7 +15,7 @@ import scipy.integrate as si
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError
 from ..model.model import Model
 from ..workspace import workspace
-from . import inputs
+from . import crossing, inputs
 from . import methods as _methods
 from .compiled import rhs_function
 from .drift import Stabilization
@@ -103,18 +103,33 @@ def keep_indices(n_steps: int, t0: float, dt: float, record: Any) -> np.ndarray:
 
 
 def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
-    """A scipy ``OdeSolver`` stepped to ``t_end``; keeps every accepted step, or the ``record`` times."""
-    meth, t0 = opts.method, opts.t0
+    """A scipy ``OdeSolver`` stepped to ``t_end``; keeps every accepted step, or the ``record`` times. A model whose
+    ideal rows may lose rank is watched, and its singular positions are stepped over
+    (:mod:`gausspp.simulation.crossing`): the solver starts again on the far side."""
+    meth, t0, model = opts.method, opts.t0, rhs.model
+    redundant = not rhs.margin_checked  # the general QP's rows dependent at the start
     options: dict[str, Any] = {"rtol": opts.rtol, "atol": opts.atol}
     if opts.dt is not None:
         options.update(first_step=opts.dt, max_step=opts.dt)
     if meth.name in ("Radau", "BDF"):  # implicit methods: the exact Jacobian from casadi where it exists
         options["jac"] = jacobian(rhs)
     solver = getattr(si, meth.name)(rhs, t0, y0, opts.t_end, **options)
+    watch = crossing.SingularityWatch(model, t0, y0, rhs) if crossing.applies(model) else None
+    events: list[dict[str, Any]] = []
     times = None if np.isscalar(opts.record) else np.sort(np.asarray(opts.record, float))  # checked by check_record
     keep_start = times is None or times[0] == t0
     ts, ys = ([t0], [y0.copy()]) if keep_start else ([], [])
     failure, steps, t_prev = None, 0, t0
+
+    def keep(t_new: float, y_new: np.ndarray, dense: Any) -> None:
+        if times is None:
+            ts.append(t_new)
+            ys.append(y_new.copy())
+        else:
+            for tk in times[(times > t_prev) & (times <= t_new)]:
+                ts.append(float(tk))
+                ys.append(y_new.copy() if tk == t_new else np.asarray(dense()(tk)))
+
     while solver.status == "running":
         try:
             message = solver.step()
@@ -135,20 +150,38 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
             except GaussppError as exc:
                 failure = exc
                 break
-        if times is None:
-            ts.append(solver.t)
-            ys.append(solver.y.copy())
-        else:
-            dense = solver.dense_output()
-            for tk in times[(times > t_prev) & (times <= solver.t)]:
-                ts.append(float(tk))
-                ys.append(np.asarray(dense(tk)))
+        keep(solver.t, solver.y, solver.dense_output)
         t_prev = solver.t
+        if watch is None or solver.t >= opts.t_end:
+            continue
+        try:
+            plan = watch.observe(solver.t, solver.y, solver.dense_output)
+            if isinstance(plan, crossing.Approach):  # step to the point the bridge starts from
+                solver = getattr(si, meth.name)(rhs, solver.t, solver.y, plan.t, **options)
+                continue
+            if not isinstance(plan, crossing.Cross):
+                if solver.status == "finished":  # an approach point was reached, the bridge not needed: go on
+                    solver = getattr(si, meth.name)(rhs, solver.t, solver.y, opts.t_end, **options)
+                continue
+            over = crossing.bridge(rhs, model, projection(model, redundant), solver.t, solver.y, plan.t, opts.t_end)
+        except GaussppError as exc:
+            failure = exc
+            break
+        steps += 1
+        events.append(over.event)
+        keep(over.t, over.y, lambda dense=over.dense: dense)
+        t_prev = over.t
+        if over.t >= opts.t_end:
+            break
+        watch.restart(over.t, over.y)
+        solver = getattr(si, meth.name)(rhs, over.t, over.y, opts.t_end, **options)
     if failure is not None and times is not None and (not ts or solver.t > ts[-1]):
         ts.append(float(solver.t))  # a failed run keeps the last state it reached, between the record times
         ys.append(np.asarray(solver.y).copy())
     y = np.array(ys).reshape(len(ts), y0.size)
-    return Samples(np.array(ts), y, steps, rhs.evaluations, failure, meth.name, rhs.solver)
+    if watch is not None:
+        events = sorted([*events, *watch.stepped], key=lambda e: e["t"])
+    return Samples(np.array(ts), y, steps, rhs.evaluations, failure, meth.name, rhs.solver, events=tuple(events))
 
 
 def jacobian(rhs: AnyRightHandSide) -> Any:

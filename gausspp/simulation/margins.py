@@ -38,8 +38,11 @@ def audit(
     S: np.ndarray,
     margin: np.ndarray,
     failure: Exception | None,
+    crossed: tuple[float, ...] = (),
 ) -> Audit:
-    """Check the sampled margin (``S``: the normalized ``S`` of each sample); ``failure``: the recording's own."""
+    """Check the sampled margin (``S``: the normalized ``S`` of each sample); ``failure``: the recording's own;
+    ``crossed``: the singular positions the run stepped over (:mod:`gausspp.simulation.crossing`), where the margin
+    of ideal rows touches zero and the motion goes on."""
     n, notes = t.size, list[str]()
     if not rhs.margin_checked:  # redundant rows: the margin is 0 by design and says nothing
         return n, failure, notes
@@ -48,7 +51,7 @@ def audit(
         found = _sign_change(model, t, S)
         if found is not None:
             n, failure = found
-    touch = touches_zero(t[:n], margin[:n], model.margin_error) if replaceable(failure) else None
+    touch = touches_zero(t[:n], margin[:n], model.margin_error, crossed) if replaceable(failure) else None
     if touch is not None:  # a minimum of the margin between samples reaches zero: the step went past it
         i, t_min = touch
         notes.append(
@@ -117,13 +120,18 @@ def _vanished(
     )
 
 
-def touches_zero(ts: np.ndarray, margin: np.ndarray, floor: float) -> tuple[int, float] | None:
+def touches_zero(
+    ts: np.ndarray, margin: np.ndarray, floor: float, crossed: tuple[float, ...] = ()
+) -> tuple[int, float] | None:
     """First strict local minimum of the sampled margin whose parabola through it and its neighbours dips
     below ``floor``: a margin that touches zero between samples without changing the sign of det S (the
-    crane's ``sin²θ``). Returns the sample index and the estimated time, or ``None``."""
+    crane's ``sin²θ``). Returns the sample index and the estimated time, or ``None``. Minima whose neighbours
+    enclose a ``crossed`` instant (a singular position stepped over) are not suspect."""
     inner = margin[1:-1]  # only an already small strict minimum is suspect
     suspects = np.flatnonzero((inner < SMALL_MARGIN) & (inner < margin[:-2]) & (inner < margin[2:])) + 1
     for i in suspects:
+        if any(ts[i - 1] < c < ts[i + 1] for c in crossed):
+            continue
         m0, m1, m2 = margin[i - 1 : i + 2]
         t0, t1, t2 = ts[i - 1 : i + 2]
         a, b, c = np.polyfit([t0 - t1, 0.0, t2 - t1], [m0, m1, m2], 2)

@@ -134,7 +134,8 @@ def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples, tol: fl
             known = margin[:good]
     failure = _fill(cols, evaluate, cols.kept)
     margin = cols.margin(known)
-    kept, failure, notes = audit(model, rhs, samples.t[: cols.kept], y, cols.S[: cols.kept], margin, failure)
+    crossed = tuple(e["t"] for e in samples.events if e.get("kind") == "singular position")
+    kept, failure, notes = audit(model, rhs, samples.t[: cols.kept], y, cols.S[: cols.kept], margin, failure, crossed)
     kept, failure = _within(model, samples.t, y, cols, tol, kept, failure)
     return _trajectory(model, samples, cols, margin, kept), failure, notes
 

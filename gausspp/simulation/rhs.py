@@ -57,6 +57,14 @@ class RightHandSide(_StateDerivative):
         m = model
         self._slices = (slice(0, m.nq), slice(m.nq, m.nq + m.nv), slice(m.nq + m.nv, m.nq + m.nv + m.n_lam))
         self._lam_cols = np.array(model.lam_columns, dtype=int)
+        #: ``(t, y, margin)`` of the last evaluation that passed (``y`` the caller's array, not a copy)
+        self.last_margin: tuple[float, np.ndarray, float] | None = None
+
+    def margin_at(self, t: float, y: np.ndarray) -> float | None:
+        """The realizability margin of the last evaluation if it was at ``(t, y)`` (an integrator's accepted state
+        is its last stage), else ``None``."""
+        last = self.last_margin
+        return last[2] if last is not None and last[0] == t and np.array_equal(last[1], y) else None
 
     def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
         """Evaluate the step at ``(t, y)``; raise a project error if it fails."""
@@ -76,7 +84,9 @@ class RightHandSide(_StateDerivative):
         out = self.kernel.result()
         ok = out["pivot"][0] > 0 and np.isfinite(out["checksum"][0]) and out["qp_primal"][0] <= QP_TOLERANCE
         if ok:  # the realizability margin, at every evaluation (docs/theory.md §2): σ_min of the normalized S
-            ok = step_margin(out["S_norm"], self.model.k, self.model.m) >= self.model.margin_error
+            margin = step_margin(out["S_norm"], self.model.k, self.model.m)
+            self.last_margin = (t, y, margin)
+            ok = margin >= self.model.margin_error
         if not ok:  # diagnose: raises the project error that explains the failure
             size = float(np.max(np.abs(y)))
             if not size < 1e100:
