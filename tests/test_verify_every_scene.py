@@ -63,6 +63,21 @@ def test_contacts_are_verified_between_events() -> None:
     assert "velocity jump(s) checked against the impact law" in check.message
 
 
+def test_a_velocity_jump_off_the_impact_law_is_caught() -> None:
+    """Negative control of the jump check: the bouncing pendulum's first v⁺ altered by 1e-3 (relative) is named;
+    the recorded one passes."""
+    from dataclasses import replace
+
+    scene = gp.scenes.get("bouncing-pendulum")
+    traj = run(scene, 1.2)
+    assert "impact law by" not in gp.verify(scene.model, traj).message
+    after = int(np.flatnonzero(traj.t[1:] <= traj.t[:-1])[0]) + 1
+    v = traj.v.copy()
+    v[after] *= 1 + 1e-3
+    check = gp.verify(scene.model, replace(traj, v=v))
+    assert not check.is_motion and "differs from the model's impact law" in check.message
+
+
 def test_resting_contact_force_is_recovered() -> None:
     scene = gp.scenes.get("block-on-floor")
     traj = run(scene, 1.5)

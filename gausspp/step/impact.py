@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
+from . import impact_qp
 from .data import evaluate
 from .general import solve_general
 from .general.model_qp import closed_rows, gauss_problem
@@ -39,18 +40,24 @@ def impact(
     target = -e * np.minimum(d.gdotc[closed], 0.0)  # ġ⁺ ≥ target
     # the same problem one level down: v⁻ plays a₀, impulses play forces, the rows act on v⁺
     phi = d.J @ v - d.Phi
-    problem = gauss_problem(model, t, d.A, v, d.J, phi, d.D, d.Jc, Jcc @ v - d.gdotc[closed] + target, closed)
-    sol = solve_general(problem, backend)
     impulse = np.zeros(len(model.contact_row_names))
-    impulse[closed] = sol.u[model.m :]
-    lam_after = lam + sol.u[: model.m][model.lam_columns] if model.n_lam else lam
+    fast = impact_qp.ideal_impact(model, backend, d.A, v, d.J, phi, Jcc, Jcc @ v - d.gdotc[closed] + target)
+    if fast is not None:  # ideal rows: one QP in v⁺, verified (else the general route below)
+        v_after, lam_after = fast[0], lam
+        impulse[closed] = fast[2]
+    else:
+        problem = gauss_problem(model, t, d.A, v, d.J, phi, d.D, d.Jc, Jcc @ v - d.gdotc[closed] + target, closed)
+        sol = solve_general(problem, backend)
+        impulse[closed] = sol.u[model.m :]
+        v_after = sol.a
+        lam_after = lam + sol.u[: model.m][model.lam_columns] if model.n_lam else lam
     return ImpactResult(
         t=t,
         v_before=v,
-        v_after=sol.a,
+        v_after=v_after,
         lam_after=lam_after,
         impulse=impulse,
         closed=closed,
         kinetic_energy_before=0.5 * float(v @ d.A @ v),
-        kinetic_energy_after=0.5 * float(sol.a @ d.A @ sol.a),
+        kinetic_energy_after=0.5 * float(v_after @ d.A @ v_after),
     )

@@ -156,7 +156,10 @@ def _jumps(model: Model, path: Path) -> tuple[int, list[str]]:
         ]
         lam = None if path.lam is None else path.lam[i - 1]
         res = model.impact(t, path.q[i - 1], path.v[i - 1], lam, plastic=plastic)
-        scale = max(float(np.abs(path.v[i - 1 : i + 1]).max()), np.finfo(float).tiny)
+        # relative to the speed there, not below round-off of the motion's speed (a "jump" at an apex, v ≈ 0)
+        scale = max(
+            float(np.abs(path.v[i - 1 : i + 1]).max()), 1e-9 * float(np.abs(path.v).max()), np.finfo(float).tiny
+        )
         error = float(np.abs(res.v_after - path.v[i]).max()) / scale
         if not error <= JUMP_TOL:
             out.append(
