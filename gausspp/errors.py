@@ -78,11 +78,11 @@ class IntegrationError(GaussppError):
 
 
 class DriftError(IntegrationError):
-    """The recorded motion left its constraints by more than the run's ``constraint_tol``.
+    """The recorded motion left its constraints, or its energy balance, by more than the run's ``drift_tol`` allows.
 
     A step that answered at every state can still carry the motion off the manifold: a fixed step too long for
     the motion, or a step across a singular position onto a state the constraints no longer hold. Attributes
-    give the first time and the row.
+    give the first time and the row (``"energy balance"`` when the energy, not a row, is what was left).
     """
 
     def __init__(

@@ -263,9 +263,13 @@ def test_parameter_values_are_python_literals() -> None:
 
 def test_progress_on_a_non_terminal(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
     monkeypatch.setattr(console.Progress, "_LOG_AT", (0.05,))
+    err = ""
     with console.Progress("working", delay=0.0):
-        time.sleep(0.3)
-    err = capsys.readouterr().err
+        deadline = time.monotonic() + 60  # wait for the line, however loaded the machine (only a hang waits long)
+        while "gausspp: working … " not in err and time.monotonic() < deadline:
+            time.sleep(0.01)
+            err += capsys.readouterr().err
+    err += capsys.readouterr().err
     assert "gausspp: working … " in err and "gausspp: working: done in" in err
     with console.Progress("quick", delay=1.0):  # shorter than the delay: silent
         pass

@@ -54,7 +54,7 @@ SHAPES = [(3, 2, 2, 0), (4, 2, 2, 1), (3, 1, 2, 3), (5, 2, 4, 5)]  # (n, k, m, s
 
 @pytest.mark.parametrize("n, k, m, seed", SHAPES)
 def test_acceleration_qp_agrees_with_the_raw_answers_on_random_systems(n: int, k: int, m: int, seed: int) -> None:
-    """4 models × 300 states = 1200 systems with state-dependent ``A``. Measured: largest raw distance 2e-13
+    """4 models × 300 states = 1200 systems with state-dependent ``A``. Measured: largest raw distance 7.1e-13
     (direct and compiled QP), reference KKT residuals below 1e-14."""
     model = _random_model(n, k, m, seed)
     rng = np.random.default_rng(100 + seed)
@@ -68,7 +68,7 @@ def test_acceleration_qp_agrees_with_the_raw_answers_on_random_systems(n: int, k
         assert check.ok, str(check)
         worst = max(worst, *check.distances.values())
         checked += 1
-    assert worst <= 1e-9
+    assert worst <= 1e-10  # measured ≤ 7.1e-13 (n = 5, m = 4): a hundred times that, not the cross-check's 1e-9
     print(f"{n=} {k=} {m=}: largest raw distance {worst:.1e}")
 
 

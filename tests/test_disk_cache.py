@@ -51,12 +51,27 @@ def test_a_damaged_file_is_rebuilt(tmp_path: Path) -> None:
 
 
 def test_off_means_nothing_written(tmp_path: Path, monkeypatch) -> None:
+    """With the cache off, a function is built and nothing is written — looked for where the cache would write
+    (the default folder under a fresh home); the control: the same call with the cache on writes a file there."""
+    home = tmp_path / "home"
+    home.mkdir()
+    monkeypatch.setenv("HOME", str(home))
     monkeypatch.setenv(disk_cache.ENV, "off")
     assert disk_cache.directory() is None
     sc = gp.scenes.get("planar-chain", N=2)
     calls = []
-    fn = disk_cache.cached_function(sc.model, ("probe",), lambda: calls.append(1) or sc.model.kernel("direct").function)
-    assert calls == [1] and fn.n_in() == 5 and not list(tmp_path.iterdir())
+
+    def build():
+        calls.append(1)
+        return sc.model.kernel("direct").function
+
+    before = dict(disk_cache.counts)
+    fn = disk_cache.cached_function(sc.model, ("probe", str(tmp_path)), build)
+    assert calls == [1] and fn.n_in() == 5
+    assert not [p for p in home.rglob("*") if p.is_file()] and disk_cache.counts == before
+    monkeypatch.delenv(disk_cache.ENV)  # the control: on, at the default folder under that home
+    disk_cache.cached_function(sc.model, ("probe", str(tmp_path)), build)
+    assert calls == [1, 1] and list((home / ".cache" / "gausspp").glob("*.casadi"))
 
 
 def test_the_fingerprint_follows_the_equations_and_options() -> None:

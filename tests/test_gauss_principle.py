@@ -69,8 +69,10 @@ def test_qp_equals_direct(args: tuple[int, int, float, int]) -> None:
     gauss = gp.solve(p, solver="qp")
     assert rel(gauss.a, direct.a) < 1e-8
     assert rel(gauss.u, direct.u) < 1e-8
-    # and both keep the constraint J a = φ
+    # and both keep the constraint J a = φ (checked on each: the two share the reduction, so their agreement alone
+    # is no evidence — tests/test_step_reference.py compares every route with the independent gp.acceleration_qp)
     assert rel(p.J @ direct.a, p.phi) < 1e-8
+    assert rel(p.J @ gauss.a, p.phi) < 1e-8
 
 
 @settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.filter_too_much])
@@ -80,9 +82,10 @@ def test_pythagoras_and_least_compulsion(args: tuple[int, int, float, int], wsee
     p = make(*args)
     assume(cosines(p.A, p.J, p.D).min() > 1e-3)
     res = gp.solve(p, solver="qp")
+    assert rel(p.J @ res.a, p.phi) < 1e-8  # the answer is feasible: the identity below is about feasible points
     n, m = p.D.shape
     if n == m:
-        return  # no conceivable variation: Dᵀw = 0 forces w = 0
+        return  # no conceivable variation: Dᵀw = 0 forces w = 0 (tests/test_step_reference.py has larger sets)
     rng = np.random.default_rng(wseed)
     null = np.linalg.svd(p.D.T)[2][m:].T  # orthonormal basis of ker Dᵀ
     w = null @ rng.standard_normal(null.shape[1]) * rng.uniform(1e-3, 1e3)

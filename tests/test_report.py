@@ -46,7 +46,9 @@ def test_every_scene_reaches_1e_10_with_some_method() -> None:
 def test_failed_runs_stay_in_the_table() -> None:
     rows = report.work_precision(["stiff-chain"], ["rk4"], ["direct"], repeats=1)
     failed = [r for r in rows if r.status == "failed"]
-    assert failed and "diverged" in failed[0].message and np.isnan(failed[0].final_error)
+    # rk4 is unstable on the stiff chain at this step: the energy audit sees the growth before the state overflows
+    message = failed[0].message if failed else ""
+    assert ("diverged" in message or "left its energy balance" in message) and np.isnan(failed[0].final_error)
 
 
 def test_qp_floor_lists_round_off_backends_and_explains_osqp() -> None:

@@ -183,13 +183,20 @@ def test_saturated_crane_backends_agree_along_the_saturation(tight_crane) -> Non
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_saturated_crane_step_at_the_saturation_onset(backend: str) -> None:
     """A state DOP853 (rtol 1e-11, stabilize='baumgarte') reaches at the saturation onset: the servo needs
-    12.0000004993 N (4.2e-8 above F_max = 12). Both backends used to raise QPSolveError there, which ended that
-    run at t = 1.42254; now: the motor at its bound and a tiny tracking error (≤ 1e-7 relative), no error."""
+    4.2e-8 (relative) more than F_max = 12 N, by the step's closed form from its data. Both backends used to raise
+    QPSolveError there, which ended that run at t = 1.42254; now: the motor at its bound and a tiny tracking error
+    (≤ 1e-7 relative), no error."""
     scene = saturated_crane.build()
     t, stab = 1.4225378900837975, np.array([40.0, 400.0])
     q, v = np.array([3.692358264134606, -0.17884083005971202]), np.array([4.182034807520846, 0.44502514141146726])
-    need = saturated_crane.build(F_max=1e9).model.general_step(t, q, v, stab=stab)[0].u[0]
-    assert need == pytest.approx(12.0000004993, rel=1e-10)
+    free = saturated_crane.build(F_max=1e9).model
+    need = free.general_step(t, q, v, stab=stab)[0].u[0]
+    # the force the servo needs, from the step's data alone: u = (J A⁻¹ D)⁻¹ (φ − J A⁻¹ (f + r₀))
+    d = free.evaluate_data(t, q, v, np.zeros(free.n_lam), stab)
+    solve = np.linalg.solve
+    reference = solve(d.J @ solve(d.A, d.D), d.phi - d.J @ solve(d.A, d.f + d.r0))[0]
+    assert 12.0 * (1 + 1e-8) < reference < 12.0 * (1 + 1e-7)  # just above the bound: measured 4.2e-8 relative
+    assert need == pytest.approx(reference, rel=1e-12)  # measured 7.8e-15
     res = scene.model.general_step(t, q, v, backend=backend, stab=stab)[0]
     assert res.u[0] == pytest.approx(12.0, rel=1e-14) and res.saturated.all()
     assert 0.0 <= res.tracking_error < 1e-7

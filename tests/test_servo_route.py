@@ -34,11 +34,12 @@ def test_the_crane_follows_its_flat_solution(crane) -> None:
     scene, traj = crane
     assert traj.status == "success" and traj.t[0] == 0.0 and traj.t[-1] == pytest.approx(scene.t_end)
     q, forces = exact(scene, traj.t)
-    assert np.abs(traj.constraint).max() <= 1e-8  # the payload on its path, m
-    assert np.abs(traj.q[:, 0] - q[:, 0]).max() <= 1e-8  # the trolley, m
-    assert np.abs(traj.q - q).max() <= 1e-8
-    assert np.all(force_error(traj.forces, forces) <= 1e-6)  # F1, F2
-    assert not np.all(force_error(traj.forces * (1 + 1e-5), forces) <= 1e-6)  # a wrong force would show
+    # tolerances ~100 times the achieved figures (an unstable feedback grows from round-off well past them)
+    assert np.abs(traj.constraint).max() <= 1e-9  # the payload on its path, m (measured 4.0e-12)
+    assert np.abs(traj.q[:, 0] - q[:, 0]).max() <= 1e-9  # the trolley, m
+    assert np.abs(traj.q - q).max() <= 1e-9  # measured 5.3e-12
+    assert np.all(force_error(traj.forces, forces) <= 5e-9)  # F1, F2 (measured 4.5e-11, 1.5e-12)
+    assert not np.all(force_error(traj.forces * (1 + 1e-7), forces) <= 5e-9)  # a wrong force would show
 
 
 def test_the_crane_is_diagnosed_mixed_of_index_five(crane) -> None:
@@ -52,9 +53,9 @@ def test_the_crane_is_diagnosed_mixed_of_index_five(crane) -> None:
 def test_the_crane_forces_alone_keep_the_payload_on_its_path(crane) -> None:
     """Open loop: the free crane under the returned forces (interpolated), no constraint, no feedback."""
     scene, traj = crane
-    assert np.abs(gp.replay(scene.model, traj).constraint).max() <= 1e-6
-    wrong = ServoTrajectory(**{**vars(traj), "forces": traj.forces * (1 + 1e-4)})
-    assert np.abs(gp.replay(scene.model, wrong).constraint).max() > 1e-6
+    assert np.abs(gp.replay(scene.model, traj).constraint).max() <= 1e-7  # measured 1.3e-9
+    wrong = ServoTrajectory(**{**vars(traj), "forces": traj.forces * (1 + 1e-5)})
+    assert np.abs(gp.replay(scene.model, wrong).constraint).max() > 1e-7
 
 
 @pytest.mark.parametrize("n", [1, 2, 3, 4, 5, 6])
@@ -63,8 +64,8 @@ def test_the_spring_chain_has_index_2n_plus_1_and_its_flat_force(n: int) -> None
     traj = gp.simulate_servo(scene.model, scene.q0, scene.v0, scene.t_end)
     assert traj.status == "success" and traj.index == 2 * n + 1 and traj.degrees == (2 * n,)
     _, forces = exact(scene, traj.t)
-    assert force_error(traj.forces, forces)[0] <= 1e-6
-    assert force_error(traj.forces + 1e-5 * np.abs(forces).max(), forces)[0] > 1e-6
+    assert force_error(traj.forces, forces)[0] <= 5e-9  # measured 2.3e-11 … 9.1e-11 over n = 1 … 6
+    assert force_error(traj.forces + 1e-7 * np.abs(forces).max(), forces)[0] > 5e-9
     kind = gp.servo_diagnosis(scene.model, 0.0, scene.q0, scene.v0).kind
     assert kind == ("orthogonal" if n == 1 else "tangential")  # one mass: the force acts on it directly
 

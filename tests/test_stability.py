@@ -308,10 +308,22 @@ def test_redundant_exact_duplicates_qp_answers_the_minimal_acceleration_and_leas
     assert res.margin <= 1e-15  # the step is singular and says so
 
 
-def test_redundant_verdict(cases: dict[str, Case]) -> None:
-    """The verdict is ✓ exactly when no problem was found (see test_redundant_case_has_no_problems)."""
-    c = cases["redundant constraints"]
-    assert c.verdict == (not c.problems), c.observed
+def test_redundant_verdict_fails_on_a_wrong_qp_answer(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Negative control of the case's ✓ (test_redundant_case_has_no_problems): with the QP step's acceleration
+    off by 1e-6 (relative) the case finds answers different from the minimal model's and says ✗, naming them."""
+    from dataclasses import replace as _replace
+
+    original = gp.Model.step
+
+    def off(self: gp.Model, *args: object, **kwargs: object) -> object:
+        res = original(self, *args, **kwargs)  # type: ignore[arg-type]
+        if kwargs.get("solver", "qp") != "direct":
+            res = _replace(res, a=res.a * (1 + 1e-6))
+        return res
+
+    monkeypatch.setattr(gp.Model, "step", off)
+    c = redundant.case(quick=True)
+    assert not c.verdict and any("different from the minimal model's" in p for p in c.problems), c.problems
 
 
 def _off_manifold_tolerance(drift: float) -> float:

@@ -30,10 +30,16 @@ def _records(out: Path) -> list[dict[str, Any]]:
 
 # -- tasks used by the tests: top level, so that worker processes can unpickle them --------------------
 def counted_task(params: dict[str, Any]) -> dict[str, float]:
-    """Deterministic, slow enough to be killed midway; logs each execution to ``params['log']``."""
+    """Deterministic; logs each execution to ``params['log']``. With ``params['gate']`` (a path), tasks from
+    ``params['held_from']`` on wait until that file exists (at most 10 min): a sweep held there is killed midway
+    whatever the machine's speed."""
     with open(params["log"], "a", encoding="utf-8") as fh:
         fh.write(f"{params['i']}\n")
     time.sleep(params.get("sleep", 0.0))
+    if params.get("gate") and params["i"] >= params["held_from"]:
+        deadline = time.monotonic() + 600
+        while not os.path.exists(params["gate"]) and time.monotonic() < deadline:
+            time.sleep(0.01)
     x = float(params["i"])
     return {"y": x * x / 7.0 + 0.1, "z": x**0.5}
 
@@ -130,27 +136,29 @@ _KILLED = """
 import sys
 from gausspp.studies.sweeps import grid, sweep
 from tests.test_sweep import counted_task
-sweep(counted_task, grid(i=range({n}), log=[sys.argv[1]], sleep=[0.03]), chunk=1, out=sys.argv[2], progress=False)
+params = grid(i=range({n}), log=[sys.argv[1]], gate=[sys.argv[3]], held_from=[10])
+sweep(counted_task, params, chunk=1, out=sys.argv[2], progress=False)
 """
 
 
 def test_killed_sweep_resumes_without_recomputing(tmp_path: Path) -> None:
     n = 40
-    log, out = tmp_path / "executions.log", tmp_path / "sweep.jsonl"
-    params = grid(i=range(n), log=[str(log)], sleep=[0.03])
+    log, out, gate = tmp_path / "executions.log", tmp_path / "sweep.jsonl", tmp_path / "gate"
+    params = grid(i=range(n), log=[str(log)], gate=[str(gate)], held_from=[10])
     proc = subprocess.Popen(
-        [sys.executable, "-c", _KILLED.format(n=n), str(log), str(out)], cwd=ROOT, start_new_session=True
+        [sys.executable, "-c", _KILLED.format(n=n), str(log), str(out), str(gate)], cwd=ROOT, start_new_session=True
     )
-    try:
-        deadline = time.monotonic() + 20
-        while time.monotonic() < deadline and (not out.exists() or len(out.read_text().splitlines()) < 9):
+    try:  # tasks 0 … 9 finish, the others wait at the gate: kill once the ten are in the file
+        deadline = time.monotonic() + 300  # only a hang reaches it
+        while time.monotonic() < deadline and (not out.exists() or out.read_text().count("}\n") < 11):
             time.sleep(0.01)
     finally:
         os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its pool workers, mid-flight
         proc.wait()
     before = {r["index"] for r in _records(out)}
-    assert 8 <= len(before) < n, "the sweep must be killed midway"
+    assert before == set(range(10)), "the sweep must be killed midway, at the gate"
     log.write_text("")
+    gate.touch()
 
     resumed = sweep(counted_task, params, executor="serial", out=out, progress=False)
     executed = [int(line) for line in log.read_text().split()]

@@ -30,6 +30,7 @@ from ..errors import (
 from ..model.model import Model
 from ..step.realizability import stacked_margins
 from .contacts import gaps, phase_step
+from .energy_audit import energy_audit
 from .labels import model_labels
 from .margins import SMALL_MARGIN, audit
 from .residual_audit import residual_audit
@@ -162,9 +163,12 @@ def record_contacts(model: Model, samples: Samples, tol: float) -> Recorded:
 def _within(
     model: Model, t: np.ndarray, y: np.ndarray, cols: Columns, tol: float, kept: int, failure: Exception | None
 ) -> tuple[int, Exception | None]:
-    """The samples to keep and the failure once the residuals are audited (:mod:`.residual_audit`): a departure
-    from the constraint explains any failure found after it."""
+    """The samples to keep and the failure once the residuals and the energy balance are audited
+    (:mod:`.residual_audit`, :mod:`.energy_audit`): a departure from either explains any failure found after it."""
     n, drift = residual_audit(model, t, y, cols.g, cols.residual, tol, kept)
+    n_energy, energy_drift = energy_audit(model, t, y, cols.energy, tol, kept)
+    if energy_drift is not None and (drift is None or n_energy < n):  # the earlier departure (a row at a tie)
+        n, drift = n_energy, energy_drift
     if drift is None or (failure is not None and n >= kept):
         return kept, failure
     return n, drift

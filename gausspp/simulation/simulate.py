@@ -99,7 +99,9 @@ def simulate(
         ``|g_i| > drift_tol·(1 + ‖q‖∞)`` or ``|Φ_i| > drift_tol·(1 + ‖v‖∞)`` ends the run with a
         :class:`~gausspp.DriftError` (a step too long for the motion, a step across a singular position off the
         branch). Rows of a model with bounded actuators are not checked (a saturated actuator falls short of its
-        constraint: ``Trajectory.tracking_error``).
+        constraint: ``Trajectory.tracking_error``). Where the model's energy balance closes, a sample with
+        ``|E − E₀ − W_R − W_F|`` above ``100·drift_tol`` of the run's energy scale ends it the same way
+        (:mod:`gausspp.simulation.energy_audit`).
     lane : str, optional
         Run in this lane of :data:`gausspp.simulation.lanes.LANES` (``"python"``, ``"compiled"``,
         ``"scipy"``, ``"cvodes"``, ``"events"``) instead of the fastest that can; e.g. ``method="rk4",

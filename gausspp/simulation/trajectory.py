@@ -119,7 +119,7 @@ class Trajectory:
         """
 
         def since_first(x: np.ndarray) -> np.ndarray:
-            return x - x[0]
+            return x - x[0] if x.size else x
 
         return since_first(self.energy) - since_first(self.work_reaction) - since_first(self.work_forces)
 

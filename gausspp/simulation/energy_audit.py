@@ -1,0 +1,93 @@
+"""Success means within tolerance, for the energy too: the recorded energy balance checked before a run is a success.
+
+Where the model knows its energy ``E`` and the power of its non-conservative forces, and neither its energy nor
+its mass matrix depends on time explicitly, every motion keeps ``E − E₀ = W_R + W_F``: the work of the reactions
+(the constraints', the actuators', the impacts') and of the applied forces, both integrated along the run. A
+step too long for the motion breaks that balance even where no constraint shows it (a model without rows, a
+fast spin). :func:`energy_audit` compares ``|E − E₀ − W_R − W_F|`` at every sample with
+``ENERGY_SHARE · drift_tol`` times the energy scale reached — the largest kinetic energy plus the largest
+exchanges ``|E − E₀| + |W_R| + |W_F|`` so far, and at least those of the run's first tenth — so a method's own
+error (``O(dt⁴)`` for ``rk4``, ``O(dt)`` oscillating for symplectic Euler, ``O(rtol)`` adaptive) passes and a
+motion that gained or lost a tenth of its energy scale does not. The first sample beyond it ends the run with a
+:class:`~gausspp.DriftError` (``constraint="energy balance"``).
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from ..errors import DriftError
+from ..model.model import Model
+from ..workspace import workspace
+
+#: The balance may be off by this times ``drift_tol`` of the energy scale (default: a tenth of it).
+ENERGY_SHARE = 100.0
+#: A state grown by more than this times the initial one is no error of a step but a motion that diverged.
+DIVERGED = 1e6
+#: A sample is judged against the energy scale reached so far, and at least against that of the run's first
+#: ``1/EARLY``: a first-order method's error is O(1) of its first steps' exchange, O(dt) of the motion's.
+EARLY = 10
+#: Kinetic energies are evaluated at up to this many samples, spread over the run (the scale needs no more).
+KINETIC_SAMPLES = 64
+
+
+def closes(model: Model) -> bool:
+    """Whether the model's energy balance is known to close: energy and forces' power known, no explicit time."""
+    mech = model.mechanism
+    if mech.energy is None or not model.has_force_power:
+        return False
+    return workspace(model).get(
+        ("energy balance closes",),
+        lambda: not (ca.depends_on(ca.SX(mech.energy), mech.t) or ca.depends_on(ca.SX(mech.A), mech.t)),
+    )
+
+
+def energy_audit(
+    model: Model, t: np.ndarray, y: np.ndarray, energy: np.ndarray, tol: float, n: int
+) -> tuple[int, DriftError | None]:
+    """The samples to keep of the first ``n`` and the failure, if the energy balance of ``(t, y)`` (``y``'s last two
+    columns the works ``W_R, W_F``; ``energy`` recorded beside) leaves ``ENERGY_SHARE·tol`` of the energy scale."""
+    if n < 2 or not closes(model):
+        return n, None
+    exchange = np.abs(energy[:n] - energy[0])
+    works = np.abs(y[:n, -2] - y[0, -2]), np.abs(y[:n, -1] - y[0, -1])
+    balance = (energy[:n] - energy[0]) - (y[:n, -2] - y[0, -2]) - (y[:n, -1] - y[0, -1])
+    early = max(1, n // EARLY)  # every sample is judged against at least the scale of the run's first tenth
+    exchanged = _reached(np.nan_to_num(exchange + works[0] + works[1], nan=0.0), early)
+    limit = ENERGY_SHARE * tol
+    if np.all(np.abs(balance) <= limit * exchanged):  # the exchanges alone are scale enough (NaN goes on)
+        return n, None
+    scale = exchanged + _reached(_kinetic(model, t, y, n), early)
+    off = np.flatnonzero(~(np.abs(balance) <= limit * scale))
+    if not off.size:
+        return n, None
+    i = int(off[0])
+    scale_i = float(scale[i])
+    size = np.abs(y[: i + 1, : model.nq + model.nv])
+    what = "diverged" if not size[-1].max() <= DIVERGED * (1.0 + size[0].max()) else "left its energy balance"
+    return i + 1, DriftError(
+        f"the motion {what} at t={t[i]:.6g}: E − E₀ − W_reaction − W_forces = {balance[i]:.3g} "
+        f"exceeds {ENERGY_SHARE:g}·drift_tol of the run's energy scale {scale_i:.3g} (samples after it are dropped); "
+        "a shorter step (dt) or tighter rtol/atol follows the motion; a larger drift_tol accepts this error",
+        t=float(t[i]),
+        constraint="energy balance",
+        residual=float(balance[i]),
+    )
+
+
+def _reached(values: np.ndarray, early: int) -> np.ndarray:
+    """The largest of ``values`` up to each sample, and at least up to sample ``early``."""
+    running = np.maximum.accumulate(values)
+    return np.maximum(running, running[min(early, values.size - 1)])
+
+
+def _kinetic(model: Model, t: np.ndarray, y: np.ndarray, n: int) -> np.ndarray:
+    """``½ vᵀ A v`` at up to :data:`KINETIC_SAMPLES` samples of the first ``n`` (0 at the others)."""
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    kinetic = np.zeros(n)
+    for i in np.unique(np.linspace(0, n - 1, min(n, KINETIC_SAMPLES)).astype(int)):
+        q, v, lam = y[i, :nq], y[i, nq : nq + nv], y[i, nq + nv : nq + nv + nl]
+        if np.all(np.isfinite(q)) and np.all(np.isfinite(v)):
+            kinetic[i] = 0.5 * float(v @ model.evaluate_data(float(t[i]), q, v, lam).A @ v)
+    return np.nan_to_num(kinetic, nan=0.0, posinf=0.0)
