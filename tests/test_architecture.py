@@ -116,8 +116,8 @@ def test_plot_imports_no_computing_code() -> None:
 LAYERS = (
     "gausspp.step",
     "gausspp.model",
+    "gausspp.servo",  # the servo route integrates a model of its own; gp.simulate runs it (simulation/servo_lane.py)
     "gausspp.simulation",
-    "gausspp.servo",
     "gausspp.scenes",
     "gausspp.verification",
     "gausspp.studies",

@@ -237,7 +237,7 @@ ROWS = [
         gp.InputError,
         r"mechanism must be a Lagrangian, RigidBody or MassMatrix, got str",
     ),  # type: ignore[arg-type]
-    row("Model without constraints", lambda: gp.Model(body(), []), gp.InputError, r"at least one constraint"),
+    row("Model with constraints not a list", lambda: gp.Model(body(), 3), gp.InputError, r"constraints must be"),
     row(
         "Model of a lambda",
         lambda: gp.Model(body(), [lambda q, v, t: v[0]]),

@@ -208,3 +208,19 @@ def test_a_small_reaction_that_does_work_is_still_caught(F: float) -> None:
     result = gp.verify(servo.model, path)
     assert not result.is_motion
     assert result.relative_gap > 0.1  # a share of order one of the reaction does work, whatever the force's size
+
+
+@pytest.mark.parametrize("method", ["qp", "closed-form"])
+def test_the_verdict_reports_the_solved_gap(method: str, rng: np.random.Generator) -> None:
+    """``judge``'s gap is the solved minimum's distance below the value at zero — from the closed form solved
+    apart (not through ``judge``): a verdict that scaled the gap (halved it: the mutation check) would accept
+    paths up to twice as far from a motion, which no is-motion test sees."""
+    from gausspp.verification.integral import judge, value_at_zero
+
+    for _ in range(20):
+        n = int(rng.integers(1, 7))
+        d = random_pointwise(rng, n, int(rng.integers(1, n + 1)), int(rng.integers(5, 40)))
+        ver = judge(d, method)
+        expected = max(0.0, -solve_closed_form(d)[0])
+        assert ver.gap == pytest.approx(expected, rel=1e-9, abs=1e-14 * value_at_zero(d))
+        assert ver.minimum == pytest.approx(value_at_zero(d) - expected, rel=1e-9, abs=1e-14 * value_at_zero(d))

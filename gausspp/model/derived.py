@@ -29,7 +29,6 @@ def _like(model: Model, constraints: list[Any]) -> Model:
         refine=model.refine,
         route=model.route_requested,
         codegen=model.codegen,
-        _allow_free=True,
     )
 
 

@@ -41,8 +41,8 @@ class SympyModel:
 
     Attributes
     ----------
-    model : Model or None
-        The constrained model (``None`` when the system has no constraint: use ``mechanism``).
+    model : Model
+        The model (with no constraint when the system has none: the free mechanism).
     mechanism : MassMatrix
         ``A(q) u̇ = f(q, u, t)``, ``q̇ = K(q, u)``; ``q`` and ``v`` in the order of ``coordinates``/``speeds``.
     constraints : tuple of Constraint
@@ -51,7 +51,7 @@ class SympyModel:
         sympy's names of ``q`` and ``u`` (``"q1"``, ``"u1"``; ``"q1'"`` for a ``LagrangesMethod``'s speeds).
     """
 
-    model: Model | None
+    model: Model
     mechanism: MassMatrix
     constraints: tuple[Constraint, ...]
     coordinates: tuple[str, ...]
@@ -119,7 +119,7 @@ def from_sympy(
     names = tuple(str(getattr(qi, "func", qi)) for qi in parts.q)
     mechanism.coordinate_names, mechanism.velocity_names = names, tuple(parts.speed_names)  # names in results
     constraints = _constraints(parts, values, mechanism, me, realization)
-    model = Model(mechanism, constraints, **model_options) if constraints else None
+    model = Model(mechanism, constraints, **model_options)
     return SympyModel(model, mechanism, tuple(constraints), names, tuple(parts.speed_names))
 
 

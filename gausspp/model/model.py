@@ -50,7 +50,8 @@ class Model:
     mechanism : Lagrangian, RigidBody or MassMatrix
         The unconstrained system.
     constraints : Constraint or sequence of Constraint
-        Each with its realization (ideal by default); :class:`~gausspp.Unilateral` contacts are kept apart.
+        Each with its realization (ideal by default); :class:`~gausspp.Unilateral` contacts are kept apart. An
+        empty list is the free mechanism (its step is the free acceleration ``A⁻¹f``).
     margin_warn : float
         A step whose realizability margin is below this warns (:class:`RealizabilityWarning`).
     margin_error : float
@@ -100,11 +101,10 @@ class Model:
         contact_tol: float = 1e-9,
         route: str = "auto",
         codegen: bool = False,
-        _allow_free: bool = False,
     ) -> None:
         if not isinstance(mechanism, Mechanism):
             raise InputError(f"mechanism must be a Lagrangian, RigidBody or MassMatrix, got {type(mechanism).__name__}")
-        constraints = _constraint_list(constraints, _allow_free)
+        constraints = _constraint_list(constraints)
         margin_warn = positive("margin_warn", margin_warn)
         margin_error = positive("margin_error", margin_error, zero_ok=True)
         contact_tol = positive("contact_tol", contact_tol, zero_ok=True)
@@ -340,6 +340,7 @@ class Model:
 
     def __repr__(self) -> str:
         cons = ", ".join(f"{n} ({c.realization.label})" for n, c in zip(self.names, self.constraints, strict=True))
+        cons = cons or "none (free)"
         contacts = ", ".join(
             f"{n} (e={c.restitution:g})" for n, c in zip(self.contact_names, self.contacts, strict=True)
         )
@@ -347,12 +348,18 @@ class Model:
         return f"Model({type(self.mechanism).__name__}, nq={self.nq}, nv={self.nv}, constraints: {cons}{more})"
 
 
-def _constraint_list(constraints: Constraint | Sequence[Constraint], allow_free: bool) -> list[Constraint]:
+def _constraint_list(constraints: Constraint | Sequence[Constraint]) -> list[Constraint]:
+    """The constraints as a list (none: the free mechanism, the comparison every lesson starts from)."""
     if isinstance(constraints, Constraint):
         constraints = [constraints]
+    if isinstance(constraints, (str, bytes)) or not isinstance(constraints, (list, tuple)):
+        try:
+            constraints = list(constraints)
+        except TypeError:
+            raise InputError(
+                f"constraints must be a Constraint or a list of them, got {type(constraints).__name__}"
+            ) from None
     constraints = list(constraints)
-    if not constraints and not allow_free:
-        raise InputError("a Model needs at least one constraint")
     for c in constraints:
         if not isinstance(c, Constraint):
             raise InputError(f"constraints must be Constraint, Holonomic or Unilateral objects, got {type(c).__name__}")

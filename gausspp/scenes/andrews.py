@@ -6,8 +6,7 @@ constraints ``g(q) = 0``. A constant torque ``mom`` drives body 1 (angle ``β``)
 (stiffness ``c0``, rest length ``l0``) joins the fixed point ``C`` to the point ``D`` of body 3.
 Hairer & Wanner, *Solving ODEs II*, §VII.7; the Bari/CWI *Test Set for IVP Solvers*, problem
 ``andrews``. Every number here is taken from the test set's model and reference routines
-(``andrews.f``: ``andfunc``, ``andsoln``; as distributed in ``cran/deTestSet``), written up in
-``benchmarks/andrews.md``.
+(``andrews.f``: ``andfunc``, ``andsoln``; as distributed in ``cran/deTestSet``).
 
 Equations (test-set convention)::
 
@@ -35,7 +34,9 @@ precision): :data:`REFERENCE_Q` (angles ``y1..y7``), :data:`REFERENCE_V`, :data:
 and :data:`REFERENCE_LAMBDA`. Its angles are good to about :data:`PUBLISHED_ACCURACY` ``= 1.4e-9``
 (absolute), its accelerations and multipliers to 6–7 digits only; :data:`CONVERGED_Q`,
 :data:`CONVERGED_V`, :data:`CONVERGED_A`, :data:`CONVERGED_LAMBDA` are an independent
-extended-precision (long double) solution. The initial values ``q0, v0 = 0`` and the consistent
+extended-precision (long double) solution, derived again apart from gausspp by
+``python benchmarks/andrews_converged.py`` (the published formulas, mpmath's Taylor-series integrator at 30
+digits), which reproduces them to 14–16 digits. The initial values ``q0, v0 = 0`` and the consistent
 ``q̈(0)`` (:data:`ACCELERATION0`) and ``λ(0)`` (:data:`LAMBDA0`) are the test set's 30-digit values.
 :func:`significant_digits` scores a result as the test set does (``scd``).
 """

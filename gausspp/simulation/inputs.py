@@ -96,6 +96,8 @@ def check_options(  # the arguments of gp.simulate, in its order
     if not isinstance(throw, (bool, np.bool_)):
         raise InputError(f"throw must be True or False, got {throw!r}")
     record = check_record(record, t0, t_end)
+    if model.k == 0 and not model.contacts and solver in lanes.SOLVERS:  # the free mechanism: no QP to solve
+        solver, backend = "direct", None
     among = lanes.check_solver(meth, solver, backend, lane)
     if dt is not None:
         among = check_step_count(meth, model, t0, t_end, dt, record, among)

@@ -21,7 +21,7 @@ from ..errors import GaussppError, RealizabilityError
 from ..model.model import Model
 from ..step import servo_reach
 from ..step.outcome import QP_TOLERANCE
-from . import lanes, recording
+from . import lanes, recording, servo_lane
 from . import methods as _methods
 from .compiled import integrate_compiled
 from .drift import Baumgarte, Stabilization, as_stabilization
@@ -131,6 +131,9 @@ def simulate(
     )
     if model.contacts:
         return _labelled("events", model.route, lambda: run_contacts(model, q0, v0, lam0, stabilize, opts))
+    if servo_lane.wanted(model, opts.t0, q0, v0):  # reached only through higher derivatives: the servo route
+        servo_lane.check_options(opts, stabilize, lam0)
+        return servo_lane.run_servo(model, q0, v0, opts)
     stab = as_stabilization(stabilize, opts.dt)
     try:
         y0, redundant, chosen = _start(model, q0, v0, lam0, stab, opts)

@@ -53,8 +53,9 @@ class Trajectory:
     method, solver : str
     lane : str
         The lane that ran the method (:mod:`gausspp.simulation.lanes`): ``"compiled"`` (the whole run as
-        one casadi graph), ``"python"`` (fixed steps from Python), ``"scipy"``, ``"cvodes"`` or
-        ``"events"`` (contact phases); ``""`` for a trajectory not made by :func:`gausspp.simulate`.
+        one casadi graph), ``"python"`` (fixed steps from Python), ``"scipy"``, ``"cvodes"``, ``"events"``
+        (contact phases) or ``"servo"`` (the index-reduction route of a servo-constraint,
+        :mod:`gausspp.simulation.servo_lane`); ``""`` for a trajectory not made by :func:`gausspp.simulate`.
     route : str
         How each step eliminated the acceleration: ``"dense"`` or ``"sparse"`` (the model's ``route``,
         :mod:`gausspp.step.sparse`); ``""`` for a trajectory not made by :func:`gausspp.simulate`.

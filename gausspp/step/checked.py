@@ -51,6 +51,8 @@ def kernel_for(model: StepModel, solver: str, backend: str | qp.QPBackend | None
         )
     if solver == "direct" and backend is not None:
         raise InputError(f"backend={backend!r} applies to solver='qp' only")
+    if model.k == 0:  # the free mechanism: no row, no QP — the step is the free acceleration, by either solver
+        solver, backend = "direct", None
     chosen = qp.get(backend) if solver == "qp" else None
     key = ("kernel", solver, chosen.name if chosen else None, refine)
     ws = workspace(model)

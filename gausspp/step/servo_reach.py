@@ -212,22 +212,31 @@ def evaluate_J(model: StepModel, t: float, q: np.ndarray, v: np.ndarray) -> np.n
     return np.array(fn(t, q, v, np.zeros(lam.numel()), np.zeros(stab.numel())), float)
 
 
-def explain(model: StepModel, exc: RealizabilityError, t: float, q: Any, v: Any) -> RealizabilityError:
-    """The one-step route's refusal ``exc``, reworded when the actuators do reach the constraint through a higher
-    derivative: then the advice is the servo route, not other actuators. Anything else is returned unchanged."""
-    if model.n_lam or model.m != model.k or model.contacts or model.bounded:
-        return exc
-    if any(g.label != "force" for g in model.groups):  # only actuators can be out of reach; rows of other
-        return exc  # realizations that fail are dependent rows or directions: the original advice stands
+def higher_reach(model: StepModel, t: float, q: Any, v: Any) -> Reach | None:
+    """How the actuators reach the constraint when only its higher derivatives feel them (index above 3, or
+    integrators needed in front of an actuator); ``None`` where the one-step route is the one (or nothing
+    reaches): only actuators (force realizations, as many as rows, no λ, no contacts or bounds) can be out of
+    reach — rows of other realizations that fail are dependent rows or directions."""
+    if model.n_lam or model.m != model.k or model.contacts or model.bounded or not model.k:
+        return None
+    if any(g.label != "force" for g in model.groups):
+        return None
     q, v = np.asarray(q, float), np.asarray(v, float)
     J = evaluate_J(model, t, q, v)
     if np.linalg.matrix_rank(J) < model.k:  # redundant rows, not a question of reach
-        return exc
+        return None
     try:
         reach = find_reach(model, t, q, v, max_extensions=4)
-    except (InputError, RuntimeError):  # no actuator reaches it: the original advice stands
-        return exc
-    if reach.index <= 3 and not any(reach.extended.chains):
+    except (InputError, RuntimeError):  # no actuator reaches it
+        return None
+    return None if reach.index <= 3 and not any(reach.extended.chains) else reach
+
+
+def explain(model: StepModel, exc: RealizabilityError, t: float, q: Any, v: Any) -> RealizabilityError:
+    """The one-step route's refusal ``exc``, reworded when the actuators do reach the constraint through a higher
+    derivative: then the advice is the servo route, not other actuators. Anything else is returned unchanged."""
+    reach = higher_reach(model, t, q, v)
+    if reach is None:
         return exc
     degrees = ", ".join(f"{r!r}: {d}" for r, d in zip(model.row_names, reach.degrees, strict=True))
     extension = " (with integrators in front of some actuators)" if any(reach.extended.chains) else ""
