@@ -32,6 +32,7 @@ from .constraints import Constraint, Holonomic
 from .mechanism import MassMatrix
 from .model import Model
 from .realizations import Realization
+from .sympy_energy import energy_parts
 from .sympy_expr import matrix_to_casadi, to_casadi
 
 
@@ -115,7 +116,9 @@ def from_sympy(
         symbol: number(f"from_sympy: parameter {symbol} must be a finite number, got {value!r}", value)
         for symbol, value in (parameters or {}).items()
     }
-    mechanism = _mechanism(parts, values, me)
+    t = _time(me)
+    kd = {} if parts.extra_leaves else {qi.diff(t): k for qi, k in zip(parts.q, parts.qdot, strict=True)}
+    mechanism = _mechanism(parts, values, me, energy_parts(source, parts.u, kd, me))
     names = tuple(str(getattr(qi, "func", qi)) for qi in parts.q)
     mechanism.coordinate_names, mechanism.velocity_names = names, tuple(parts.speed_names)  # names in results
     constraints = _constraints(parts, values, mechanism, me, realization)
@@ -228,8 +231,17 @@ def _leaves(parts: _Parts, values: dict[Any, float], q: Any, v: Any, t: Any, me:
     return leaves
 
 
-def _mechanism(parts: _Parts, values: dict[Any, float], me: Any) -> MassMatrix:
+def _mechanism(parts: _Parts, values: dict[Any, float], me: Any, energy: tuple[Any, list[Any]] | None) -> MassMatrix:
+    """``A u̇ = f``, ``q̇ = K``, with the energy and the non-conservative forces where they are known
+    (:mod:`gausspp.model.sympy_energy`)."""
     identity = len(parts.q) == len(parts.u) and all(k == ui for k, ui in zip(parts.qdot, parts.u, strict=True))
+    extra: dict[str, Any] = {}
+    if energy is not None:
+        total, forces = energy
+        extra = dict(
+            energy=lambda q, v, t: to_casadi(total, _leaves(parts, values, q, v, t, me)),
+            nonconservative=lambda q, v, t: matrix_to_casadi(forces, _leaves(parts, values, q, v, t, me)),
+        )
 
     def A(q: Any, t: Any) -> ca.SX:
         return matrix_to_casadi(parts.mass, _leaves(parts, values, q, None, t, me))
@@ -240,6 +252,14 @@ def _mechanism(parts: _Parts, values: dict[Any, float], me: Any) -> MassMatrix:
     def kinematics(q: Any, v: Any, t: Any) -> ca.SX:
         return matrix_to_casadi(parts.qdot, _leaves(parts, values, q, v, t, me))
 
+    try:
+        if identity:
+            return MassMatrix(len(parts.u), A, f, **extra)
+        return MassMatrix(len(parts.u), A, f, kinematics=kinematics, nq=len(parts.q), **extra)
+    except InputError:
+        if not extra:
+            raise
+    # an energy term casadi could not take (a symbol sympy left in it): the model without its energy, as before
     if identity:
         return MassMatrix(len(parts.u), A, f)
     return MassMatrix(len(parts.u), A, f, kinematics=kinematics, nq=len(parts.q))
