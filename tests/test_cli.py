@@ -63,7 +63,7 @@ def test_run_prints_a_summary_and_writes_the_trajectory(tmp_path: Path, capsys: 
     assert code == 0
     for key in ("status          success", "final v", "max |Φ|, |g|", "energy balance", "margin", "vs exact"):
         assert key in out
-    assert "[0.66666667, 0.66666667]" in out  # servo: both masses at F/m2
+    assert "x₁′ = 0.666667 m/s, x₂′ = 0.666667 m/s" in out  # servo: both masses at F/m2
     data = np.load(tmp_path / "two-masses.npz")
     assert str(data["status"]) == "success" and data["t"][-1] == 1.0 and data["q"].shape == (501, 2)
     np.testing.assert_allclose(data["v"][-1], [2 / 3, 2 / 3], rtol=1e-12)
@@ -298,3 +298,21 @@ def test_demo_reports_each_row_as_it_finishes(demo_run) -> None:
     assert all(line.split()[2].endswith(f"/{len(plan)}") and line.endswith(" s)") for line in lines)
     for task in plan:
         assert sum(f" {task.table} {task.name} (" in line for line in lines) == 1, task
+
+
+def test_the_run_summary_names_coordinates_with_units_and_shortens_long_vectors(capsys) -> None:
+    """Issue 30, item 5: `gausspp run` names each coordinate with its unit (velocities as rates), explains the
+    margin, and shows a 96-entry state by its first and last entries with the count."""
+    from gausspp.cli import main
+
+    assert main(["run", "pendulum", "--t-end", "0.2"]) == 0
+    out = capsys.readouterr().out
+    lines = {line.split()[0] + " " + line.split()[1]: line for line in out.splitlines() if line.startswith("  final")}
+    assert "x = " in lines["final q"] and " m, " in lines["final q"] and " rad" in lines["final q"]
+    assert "φ′ = " in lines["final v"] and "rad/s" in lines["final v"]
+    assert "pin-x = " in lines["final u"]
+    assert "1 = one ideal row" in out
+    assert main(["run", "planar-chain", "-p", "N=32", "--t-end", "0.05"]) == 0
+    out = capsys.readouterr().out
+    final_q = next(line for line in out.splitlines() if line.startswith("  final q"))
+    assert "(96 values)" in final_q and final_q.count(" = ") <= 8 and "θ₃₂ = " in final_q

@@ -95,6 +95,32 @@ def thin(traj: Trajectory, gap: float) -> Trajectory:
     return replace(traj, **fields)
 
 
+#: What the margin row means, in one line.
+MARGIN_MEANING = "σ_min of the normalized J A⁻¹ D: 1 = one ideal row, < 1 rows or directions leaning together, 0 = lost"
+#: Vectors longer than this are shown by their first and last entries.
+SHOWN = 8
+
+
+def named(values: np.ndarray, names: tuple[str, ...] = (), rate: bool = False) -> str:
+    """``x = 0.772 m, z = −0.636 m`` from names written ``"x (m)"`` (``rate``: ``x′ = … m/s``); a plain vector
+    without names; the first and last entries only beyond :data:`SHOWN` (with the count)."""
+    values = np.asarray(values, float).ravel()
+    if len(names) != values.size:
+        text = vector(values if values.size <= SHOWN else values[:SHOWN])
+        return text if values.size <= SHOWN else f"{text[:-1]}, … ] ({values.size} values)"
+    items = []
+    for name, value in zip(names, values, strict=True):
+        label, _, unit = name.partition(" (")
+        unit = unit.rstrip(")")
+        if rate:
+            label, unit = f"{label}′", (f"{unit}/s" if unit else "1/s")
+        items.append(f"{label} = {value:.6g}" + (f" {unit}" if unit else ""))
+    if len(items) > SHOWN:
+        items = [*items[: SHOWN - 2], "…", *items[-2:]]
+        return ", ".join(items) + f" ({values.size} values)"
+    return ", ".join(items)
+
+
 def setting(traj: Trajectory, dt: float | None, rtol: float) -> str:
     """The run's accuracy setting: ``rtol …`` for adaptive methods, ``dt …`` otherwise."""
     return f"rtol {rtol:g}" if methods.get(traj.method).adaptive else f"dt {dt:g}"
@@ -102,11 +128,13 @@ def setting(traj: Trajectory, dt: float | None, rtol: float) -> str:
 
 def _state_rows(scene: scenes.Scene, traj: Trajectory) -> list[tuple[str, str]]:
     """Final state, residual, energy balance, margin, events, contacts, saturation, error against the exact motion."""
-    rows = [("time", f"t = {traj.t[0]:g} → {traj.t[-1]:.6g}"), ("final q", vector(traj.q[-1]))]
-    rows.append(("final v", vector(traj.v[-1])))
+    names = tuple(scene.coordinates or traj.labels.coordinate or ())
+    rows = [("time", f"t = {traj.t[0]:g} → {traj.t[-1]:.6g}"), ("final q", named(traj.q[-1], names))]
+    same = len(names) == traj.v.shape[1] == traj.q.shape[1]  # q̇ = v: the velocities are the coordinates' rates
+    rows.append(("final v", named(traj.v[-1], names if same else (), rate=True)))
     if traj.lam.shape[1]:
-        rows.append(("final λ", vector(traj.lam[-1])))
-    rows.append(("final u", vector(traj.u[-1])))
+        rows.append(("final λ", named(traj.lam[-1], traj.labels.lam_state)))
+    rows.append(("final u", named(traj.u[-1], traj.labels.unknown)))
     rows.append(("max |Φ|, |g|", f"{traj.max_residual():.2e}"))
     balance = np.abs(traj.energy_balance())
     rows.append(
@@ -118,7 +146,7 @@ def _state_rows(scene: scenes.Scene, traj: Trajectory) -> list[tuple[str, str]]:
         )
     )
     if traj.margin.size:
-        rows.append(("margin", f"{traj.margin.min():.4g} … {traj.margin.max():.4g} (realizability, σ_min of S)"))
+        rows.append(("margin", f"{traj.margin.min():.4g} … {traj.margin.max():.4g} ({MARGIN_MEANING})"))
     if traj.events:
         kinds = {k: sum(ev["kind"] == k for ev in traj.events) for k in dict.fromkeys(ev["kind"] for ev in traj.events)}
         rows.append(("events", ", ".join(f"{n} {k}" for k, n in kinds.items())))
