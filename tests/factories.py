@@ -28,3 +28,24 @@ def double_pendulum(m1: float = 1.3, m2: float = 0.7, l1: float = 0.9, l2: float
         )
 
     return gp.Lagrangian(n=2, T=T)
+
+
+def kane_pendulum(g: float = 9.81, damping: float = 0.0) -> gp.SympyModel:
+    """A pendulum (unit mass, unit length) in its angle from the downward x axis, built with sympy's KanesMethod:
+    gravity as a load on the bob, ``damping`` a torque ``−c u`` on the rod; no constraint (needs sympy)."""
+    import sympy as sm
+    import sympy.physics.mechanics as me
+
+    q, u = me.dynamicsymbols("q u")
+    m, l, gravity = sm.symbols("m l g")
+    frame = me.ReferenceFrame("N")
+    rod = frame.orientnew("R", "Axis", (q, frame.z))
+    rod.set_ang_vel(frame, u * frame.z)
+    origin = me.Point("O")
+    origin.set_vel(frame, 0)
+    bob = origin.locatenew("P", l * rod.x)
+    bob.v2pt_theory(origin, frame, rod)
+    kane = me.KanesMethod(frame, q_ind=[q], u_ind=[u], kd_eqs=[q.diff() - u])
+    loads = [(bob, m * gravity * frame.x), (rod, -damping * u * frame.z)]
+    kane.kanes_equations([me.Particle("p", bob, m)], loads)
+    return gp.from_sympy(kane, parameters={m: 1.0, l: 1.0, gravity: g})

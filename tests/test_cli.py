@@ -316,3 +316,14 @@ def test_the_run_summary_names_coordinates_with_units_and_shortens_long_vectors(
     out = capsys.readouterr().out
     final_q = next(line for line in out.splitlines() if line.startswith("  final q"))
     assert "(96 values)" in final_q and final_q.count(" = ") <= 8 and "θ₃₂ = " in final_q
+
+
+def test_the_scene_list_shows_no_markup(capsys) -> None:
+    """Issue 30, item 5: `gausspp scenes` and `gausspp scenes NAME` print text, not reST (``m1``, :func:`…`)."""
+    assert cli.main(["scenes"]) == 0
+    listing = capsys.readouterr().out
+    assert "``" not in listing and ":func:" not in listing and "follower force on m1" in listing
+    for name in gp.scenes.names():
+        assert cli.main(["scenes", name]) == 0
+        out = capsys.readouterr().out
+        assert "``" not in out and ":func:`" not in out and ":data:`" not in out and ":class:`" not in out, name

@@ -9,6 +9,8 @@ from scipy.integrate import solve_ivp
 
 import gausspp as gp
 
+from .factories import kane_pendulum
+
 G = 9.81
 
 
@@ -54,21 +56,8 @@ def test_the_free_step_is_the_free_acceleration() -> None:
 
 def test_a_sympy_system_without_constraints_is_a_model() -> None:
     """from_sympy of an unconstrained pendulum (Kane) gives a Model that simulates, no longer None."""
-    me = pytest.importorskip("sympy.physics.mechanics")
-    import sympy as sm
-
-    q, u = me.dynamicsymbols("q u")
-    m, l, g = sm.symbols("m l g")
-    frame = me.ReferenceFrame("N")
-    rod = frame.orientnew("R", "Axis", (q, frame.z))
-    rod.set_ang_vel(frame, u * frame.z)
-    origin = me.Point("O")
-    origin.set_vel(frame, 0)
-    bob = origin.locatenew("P", l * rod.x)
-    bob.v2pt_theory(origin, frame, rod)
-    kane = me.KanesMethod(frame, q_ind=[q], u_ind=[u], kd_eqs=[q.diff() - u])
-    kane.kanes_equations([me.Particle("p", bob, m)], [(bob, m * g * frame.x)])
-    out = gp.from_sympy(kane, parameters={m: 1.0, l: 1.0, g: G})
+    pytest.importorskip("sympy.physics.mechanics")
+    out = kane_pendulum(G)
     assert isinstance(out.model, gp.Model) and out.model.k == 0
     traj = gp.simulate(out.model, [1.0], [0.0], 2.0)  # θ from the downward x axis: θ̈ = −g sin θ
     assert traj.success and np.abs(traj.q[:, 0] - _reference(traj.t)).max() < 1e-6

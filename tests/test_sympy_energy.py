@@ -10,6 +10,8 @@ import pytest
 
 import gausspp as gp
 
+from .factories import kane_pendulum
+
 sm = pytest.importorskip("sympy")
 me = pytest.importorskip("sympy.physics.mechanics")
 
@@ -18,18 +20,7 @@ G, THETA0 = 9.81, 1.0
 
 def _kane(damping: float = 0.0) -> gp.SympyModel:
     """A pendulum in its angle (no constraint), gravity as a load; ``damping`` adds a torque −c u."""
-    q, u = me.dynamicsymbols("q u")
-    m, l, g = sm.symbols("m l g")
-    N = me.ReferenceFrame("N")
-    R = N.orientnew("R", "Axis", (q, N.z))
-    R.set_ang_vel(N, u * N.z)
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    P = O.locatenew("P", l * R.x)
-    P.v2pt_theory(O, N, R)
-    kane = me.KanesMethod(N, q_ind=[q], u_ind=[u], kd_eqs=[q.diff() - u])
-    kane.kanes_equations([me.Particle("p", P, m)], [(P, m * g * N.x), (R, -damping * u * N.z)])
-    return gp.from_sympy(kane, parameters={m: 1.0, l: 1.0, g: G})
+    return kane_pendulum(G, damping)
 
 
 def _lagrange() -> gp.SympyModel:

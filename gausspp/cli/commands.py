@@ -10,6 +10,7 @@ import argparse
 import inspect
 import io
 import json
+import re
 import sys
 import time
 from collections import Counter
@@ -210,14 +211,24 @@ def verify(args: argparse.Namespace) -> int:
 
 
 # -- scenes ---------------------------------------------------------------------------------------------
+_ROLE = re.compile(r":\w+:`~?([^`]+)`")
+_LITERAL = re.compile(r"``([^`]+)``")
+
+
+def plain(text: str) -> str:
+    """Docstring markup as a terminal shows it: ``x`` → x, :func:`gausspp.simulate` → gausspp.simulate."""
+    return _LITERAL.sub(r"\1", _ROLE.sub(r"\1", text))
+
+
 def list_scenes(args: argparse.Namespace) -> int:
     """Every scene with a one-line description, or one scene's description and parameters."""
     if args.name is None:
         for name, line in scenes.describe().items():
-            print(f"{name:20s} {line}")
+            print(f"{name:20s} {plain(line)}")
         return EXIT_OK
     builder = scenes._builder(args.name)
-    print(f"{args.name}: {inspect.getdoc(builder)}\n\nparameters (gausspp run {args.name} --param KEY=VALUE):")
+    doc = plain(inspect.getdoc(builder) or "")
+    print(f"{args.name}: {doc}\n\nparameters (gausspp run {args.name} --param KEY=VALUE):")
     for key, param in scenes.parameters(args.name).items():
         ann = param.annotation
         kind = ann if isinstance(ann, str) else " | ".join(sorted(parameter_kinds(param))) or "any"

@@ -300,7 +300,7 @@ def _symmetric_qp(H: ca.SX, S: ca.SX, r: ca.SX, drift: ca.SX) -> tuple[ca.SX, ca
     pivots = ca.diag(ca.chol(S))
     smallest = ca.mmin(ca.if_else(pivots * pivots >= 0, pivots * pivots, 0))
     band = SINGULAR_BAND
-    damping = drift * band**2 / (band**2 + smallest * smallest)
+    damping = drift * band**4 / (band**4 + smallest**4)  # drift inside the band, (b/σ²)⁴ of it outside
     damping = ca.if_else(smallest > SINGULAR_FLOOR, damping, damping + SINGULAR_FLOOR)  # at the position itself
     Rs = ca.chol(S + damping * ca.DM.eye(rows))
     x = ca.solve(Rs, ca.solve(Rs.T, r))
@@ -313,9 +313,11 @@ def _equality_qp(H: ca.SX, S: ca.SX, r: ca.SX, drift: ca.SX) -> tuple[ca.SX, ca.
 
     Near a singular position (the smallest pivot ``σ²`` of ``M`` below :data:`SINGULAR_BAND`) a state off the
     manifold by ``drift`` (relative) would see that drift amplified by ``1/σ²`` in the multipliers: ``M`` is
-    damped there by ``ε² = drift · b²/(b² + σ⁴)`` — zero on the manifold, negligible away from the band
-    (``drift · b²/σ⁴``), and capping the amplification at ``1/drift`` inside it (damped least squares, as near a
-    kinematic singularity). On the manifold the step is exact. (A QR solve of ``S x = r`` was measured less
+    damped there by ``ε² = drift · b⁴/(b⁴ + σ⁸)`` — zero on the manifold, capping the amplification at
+    ``1/drift`` inside the band (damped least squares, as near a kinematic singularity), and ``drift·(b/σ²)⁴``
+    away from it: at the crane's margin 0.06 a state off its constraint by 0.17 is stepped as the Gauss step
+    there to round-off (with ``b²/(b² + σ⁴)`` it was 3e-6 off, with the all-clear flag up —
+    tests/test_step_reference.py). On the manifold the step is exact. (A QR solve of ``S x = r`` was measured less
     accurate here than these Cholesky factors: 5e-6 against 4e-12 at a parallelogram's crank angle of 1e-3.)
     """
     if not S.shape[0]:
@@ -326,7 +328,7 @@ def _equality_qp(H: ca.SX, S: ca.SX, r: ca.SX, drift: ca.SX) -> tuple[ca.SX, ca.
     pivots = ca.diag(ca.chol(M))
     smallest = ca.mmin(ca.if_else(pivots * pivots >= 0, pivots * pivots, 0))  # NaN (singular M) counts as 0
     band = SINGULAR_BAND
-    damping = drift * band**2 / (band**2 + smallest * smallest)
+    damping = drift * band**4 / (band**4 + smallest**4)  # drift inside the band, (b/σ²)⁴ of it outside
     Rm = ca.chol(M + damping * ca.DM.eye(M.shape[0]))
     mu = ca.solve(Rm, ca.solve(Rm.T, r))
     return ca.solve(Rh, Y @ mu), -mu
