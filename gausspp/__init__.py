@@ -41,6 +41,7 @@ from .model.urdf import frame_acceleration_bias, frame_jacobian, frame_position,
 from .servo import ServoDiagnosis, ServoTrajectory, replay, servo_diagnosis, simulate_servo
 from .simulation import methods
 from .simulation.drift import Baumgarte
+from .simulation.linearize import Linearization, linearize
 from .simulation.simulate import simulate
 from .simulation.trajectory import Trajectory, load_trajectory
 from .step import qp, realizability
@@ -123,6 +124,8 @@ __all__ = [
     "report",
     "scenes",
     "simulate",
+    "linearize",
+    "Linearization",
     "sweep",
     "sweeps",
     "solve",
