@@ -80,3 +80,23 @@ def test_bad_choices_are_refused() -> None:
     with pytest.raises(gp.InputError, match="contacts"):
         block = gp.scenes.get("block-on-floor")
         gp.linearize(block.model, 0.0, block.q0, block.v0)
+
+
+def test_a_state_where_the_step_is_not_defined_is_a_project_error() -> None:
+    """No silent number where the step has none: redundant rows (the direct step refuses them), a servo at the
+    state where its margin vanishes (the crane's rope vertical: the derivative would be finite but ~1e8), a mass
+    matrix that is not positive definite, a NaN."""
+    redundant = gp.scenes.get("four-bar-redundant")
+    with pytest.raises(gp.RealizabilityError, match="linearize: the step has no derivative"):
+        gp.linearize(redundant.model, 0.0, redundant.q0, redundant.v0)
+    crane = gp.scenes.get("crane", theta0=0.0)
+    with pytest.raises(gp.RealizabilityError, match="linearize: .*not realizable"):
+        gp.linearize(crane.model, 0.0, crane.q0, crane.v0)
+    indefinite = gp.Model(
+        gp.MassMatrix(n=2, A=lambda q, t: ca.diag(ca.vertcat(1.0, -1.0)), f=lambda q, v, t: ca.vertcat(0, -G)),
+        [gp.Holonomic(lambda q, t: q[0] - q[1], name="tie")],
+    )
+    with pytest.raises(gp.GaussppError, match="linearize: the step has no derivative"):
+        gp.linearize(indefinite, 0.0, [0.0, 0.0], [0.0, 0.0])
+    with pytest.raises(gp.NonFiniteError):
+        gp.linearize(gp.scenes.get("pendulum").model, 0.0, [np.nan, 0.0, 0.0], np.zeros(3))

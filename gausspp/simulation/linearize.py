@@ -29,7 +29,7 @@ import casadi as ca
 import numpy as np
 from scipy.linalg import qr
 
-from ..errors import InputError
+from ..errors import GaussppError, InputError, NonFiniteError
 from ..model.model import Model
 from ..workspace import workspace
 from .compiled import rhs_function
@@ -78,7 +78,13 @@ def linearize(
     t, q, v, lam = model.checked_state(t, q, v, lam)
     nq, nv, nl = model.nq, model.nv, model.n_lam
     y0 = np.concatenate([q, v, lam])
+    _step_defined(model, t, q, v, lam)  # not realizable here, A not positive definite …: the step's own error
     jac_F, F0, C = (np.array(x, float) for x in _functions(model)(t, y0))
+    if not (np.all(np.isfinite(jac_F)) and np.all(np.isfinite(F0)) and np.all(np.isfinite(C))):
+        raise NonFiniteError(
+            f"linearize: the step's derivative is NaN or inf at t={t:g} though the step itself answers there; "
+            "linearize about a nearby state"
+        )
     names = _component_names(model)
     rank = np.linalg.matrix_rank(C) if C.size else 0
     chosen = _choose(C, rank, nq + nv + nl) if independent is None else _indices(independent, names)
@@ -98,6 +104,15 @@ def linearize(
         drift=float(np.max(np.abs(F0[chosen]), initial=0.0)),
         jacobian=jac_F,
     )
+
+
+def _step_defined(model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> None:
+    """Raise the project error that says why the step (and so its derivative) is not defined at this state."""
+    try:
+        model.step(t, q, v, lam, solver="direct")
+    except GaussppError as exc:
+        exc.args = (f"linearize: the step has no derivative at t={t:g}: {exc}",)
+        raise
 
 
 def _functions(model: Model) -> ca.Function:

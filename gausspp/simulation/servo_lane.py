@@ -23,7 +23,7 @@ from scipy.integrate import cumulative_simpson
 from ..errors import GaussppError, InputError, IntegrationError, RealizabilityError, RealizabilityWarning
 from ..model.model import Model
 from ..servo.route import simulate_servo
-from ..step.servo_reach import higher_reach
+from ..step.servo_reach import actuators_only, higher_reach
 from .inputs import Options
 from .labels import model_labels
 from .recording import failed
@@ -36,9 +36,7 @@ LANE = "servo"
 def wanted(model: Model, t0: float, q0: Any, v0: Any) -> bool:
     """Whether the run is the servo route's: the one-step route refuses the start for want of reach, and the
     actuators reach the constraint through higher derivatives (:func:`~gausspp.step.servo_reach.higher_reach`)."""
-    if model.n_lam or model.m != model.k or model.contacts or model.bounded or not model.k:
-        return False  # (the cheap part of higher_reach's conditions: most models stop here)
-    if any(g.label != "force" for g in model.groups):
+    if not actuators_only(model):  # the cheap part of higher_reach's conditions: most models stop here
         return False
     try:
         _t, q, v, _lam = model.checked_state(t0, q0, v0, None)

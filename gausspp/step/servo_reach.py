@@ -212,14 +212,25 @@ def evaluate_J(model: StepModel, t: float, q: np.ndarray, v: np.ndarray) -> np.n
     return np.array(fn(t, q, v, np.zeros(lam.numel()), np.zeros(stab.numel())), float)
 
 
+def actuators_only(model: StepModel) -> bool:
+    """Rows kept by actuators alone (force realizations, as many as rows, no λ, no contacts or bounds): the only
+    models whose constraint can be out of the one-step route's reach."""
+    return bool(
+        model.k
+        and not model.n_lam
+        and model.m == model.k
+        and not model.contacts
+        and not model.bounded
+        and all(g.label == "force" for g in model.groups)
+    )
+
+
 def higher_reach(model: StepModel, t: float, q: Any, v: Any) -> Reach | None:
     """How the actuators reach the constraint when only its higher derivatives feel them (index above 3, or
     integrators needed in front of an actuator); ``None`` where the one-step route is the one (or nothing
     reaches): only actuators (force realizations, as many as rows, no λ, no contacts or bounds) can be out of
     reach — rows of other realizations that fail are dependent rows or directions."""
-    if model.n_lam or model.m != model.k or model.contacts or model.bounded or not model.k:
-        return None
-    if any(g.label != "force" for g in model.groups):
+    if not actuators_only(model):
         return None
     q, v = np.asarray(q, float), np.asarray(v, float)
     J = evaluate_J(model, t, q, v)
