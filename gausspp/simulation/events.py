@@ -21,7 +21,6 @@ after the jump, same time) and listed in ``Trajectory.events``.
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -31,8 +30,9 @@ from ..errors import GaussppError, InitialDataError, IntegrationError
 from ..model.model import Model
 from . import lanes, recording
 from . import methods as _methods
-from .contacts import active_set, gaps, off_the_start, phase_step
+from .contacts import active_set, gaps, phase_step
 from .drift import Stabilization, as_stabilization
+from .event_watch import PhaseWatch, StepDense
 from .initial import check_on_constraint, initial_state
 from .inputs import Options, check_options
 from .rhs import RightHandSide
@@ -173,7 +173,9 @@ class EventRun:
                 )
 
     def phase(self) -> tuple[int, list[int], tuple[int, ...]] | None:
-        """Integrate one phase from ``(t, y)``; return the event that ended it (``None`` at ``t_end``)."""
+        """Integrate one phase from ``(t, y)``, stepping the solver and judging each accepted step
+        (:class:`~gausspp.simulation.event_watch.PhaseWatch`); return the event that ended it (``None`` at
+        ``t_end``)."""
         model, opts, t, y = self.model, self.opts, self.t, self.y
         nq, nv, nl = model.nq, model.nv, model.n_lam
         active = active_set(
@@ -189,70 +191,51 @@ class EventRun:
         self.phases.append(active)
         inactive = [i for i in range(len(model.contact_row_names)) if i not in active]
         options: dict[str, Any] = {"rtol": opts.rtol, "atol": opts.atol}
-        if self.times is not None:
-            options["t_eval"] = self.times[(self.times > t) & (self.times <= opts.t_end)]
         if opts.dt is not None:
             options["max_step"] = opts.dt
-        events = self.event_functions(inactive, active, rhs)
+        cols = self.model.m + np.arange(len(active))
+        watch = PhaseWatch(
+            t, y, inactive, self.departing, len(active), self.gaps, lambda t_, y_: rhs.evaluate(t_, y_)["u"][cols]
+        )
+        phase = len(self.phases) - 1
         try:
-            sol = si.solve_ivp(rhs, (t, opts.t_end), y, method=opts.method.name, events=events or None, **options)
+            solver = getattr(si, opts.method.name)(rhs, t, y, opts.t_end, **options)
+            while solver.status == "running":
+                t_old = solver.t
+                message = solver.step()
+                if solver.status == "failed":
+                    raise IntegrationError(f"{opts.method.name} stopped after t={t_old:.6g}: {message}")
+                self.steps += 1
+                dense = StepDense(solver)
+                hit = watch.first_event(t_old, solver.t, solver.y, dense)
+                t_stop = solver.t if hit is None else hit[0]
+                self.keep_step(t_old, t_stop, solver.y if hit is None else None, dense, phase)
+                if hit is not None:
+                    self.departing = watch.departing | (self.departing - set(inactive))
+                    self.t, self.y = self.ts[-1], self.ys[-1].copy()
+                    return hit[1], inactive, active
         finally:
             self.evaluations += rhs.evaluations
-        return self.after_phase(sol, inactive, active)
+        self.departing = watch.departing | (self.departing - set(inactive))
+        self.t, self.y = solver.t, solver.y.copy()
+        return None
 
-    def event_functions(
-        self, inactive: list[int], active: tuple[int, ...], rhs: RightHandSide
-    ) -> list[Callable[..., float]]:
-        """Closing of each inactive contact (its gap, or ġ while it separates), letting go of each active one."""
-        # a closed contact that separates is watched on ġ: it must turn round (ġ crosses zero) before it
-        # can close again, and one long step from g ≈ 0 to g < 0 would show no sign change of g
-        fns: list[Callable[..., float]] = []
-        for i in inactive:
-            which = 1 if i in self.departing or i in self.closed else 0
-
-            def closes(t_: float, y_: np.ndarray, i: int = i, which: int = which, t0_: float = self.t) -> float:
-                return off_the_start(float(self.gaps(t_, y_)[which][i]), t_, t0_)
-
-            closes.terminal, closes.direction = True, -1  # type: ignore[attr-defined]
-            fns.append(closes)
-        for pos, _i in enumerate(active):
-
-            def lets_go(t_: float, y_: np.ndarray, col: int = self.model.m + pos, t0_: float = self.t) -> float:
-                return off_the_start(float(rhs.evaluate(t_, y_)["u"][col]), t_, t0_)
-
-            lets_go.terminal, lets_go.direction = True, -1  # type: ignore[attr-defined]
-            fns.append(lets_go)
-        return fns
-
-    def after_phase(
-        self, sol: Any, inactive: list[int], active: tuple[int, ...]
-    ) -> tuple[int, list[int], tuple[int, ...]] | None:
-        """Keep the phase's samples; move to its end event (``None``: the phase reached ``t_end``)."""
-        sol_t = np.asarray(sol.t, float)
-        sol_y = np.asarray(sol.y, float).reshape(self.y.size, sol_t.size)
-        self.steps += max(sol_t.size - 1, 0)
-        first = 0 if self.times is not None else 1  # t_eval excludes the phase's start
-        phase = len(self.phases) - 1
-        for tk, yk in zip(sol_t[first:], sol_y.T[first:], strict=True):
-            self.keep(tk, yk, phase)
-        if sol.status == -1:
-            raise IntegrationError(f"{self.opts.method.name} stopped after t={self.t:.6g}: {sol.message}")
-        if sol.status == 0:
-            return None
-        t_e, j = min((float(te[0]), j) for j, te in enumerate(sol.t_events) if te.size)
-        y_e = sol.y_events[j][0].copy()
-        if not self.ts or self.ts[-1] != t_e:
-            self.keep(t_e, y_e, phase)
-        self.t, self.y = t_e, y_e
-        return j, inactive, active
+    def keep_step(self, t_old: float, t_stop: float, y_stop: np.ndarray | None, dense: StepDense, phase: int) -> None:
+        """Keep an accepted step up to ``t_stop`` (its end, or an event inside it: always kept, from the dense
+        output): every step's end, or the record times it passes."""
+        if self.times is not None:
+            for tk in self.times[(self.times > t_old) & (self.times <= t_stop)]:
+                self.keep(float(tk), y_stop if (tk == t_stop and y_stop is not None) else dense(tk), phase)
+        if y_stop is None:  # an event: its state, once
+            if self.ts[-1] != t_stop:
+                self.keep(t_stop, dense(t_stop), phase)
+        elif self.times is None:
+            self.keep(t_stop, y_stop, phase)
 
     def on_event(self, j: int, inactive: list[int], active: tuple[int, ...]) -> None:
         """A separating contact turned round, a contact closes (touch or impact), or an active one lets go."""
         model, t = self.model, self.t
-        if j < len(inactive) and (inactive[j] in self.departing or inactive[j] in self.closed):
-            self.departing.discard(inactive[j])  # a separating contact turned round (its apex): watch its gap now
-            self.closed.discard(inactive[j])
-        elif j < len(inactive):  # a contact closes (with any other that closes at the same instant)
+        if j < len(inactive):  # a contact closes (with any other that closes at the same instant)
             i = inactive[j]
             g_now, gd_now = self.gaps(t, self.y)
             self.closed.add(i)
