@@ -122,7 +122,8 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
     u[K] = u_K
     reaction_c = JnK.T @ x * unit  # J_Kᵀ u_K of the kept rows' own answer: the acceleration's
     a = a0 + AinvJnK @ x * unit
-    reaction = p.r0 + p.D @ u
+    # D = Jᵀ: with u_D = 0 the reaction is the kept rows' own (the same sum, computed once)
+    reaction = p.r0 + (reaction_c if not D_rows or len(D_rows) > LEAST_NORM_ROWS else p.D @ u)
     residual = J @ a - p.phi
 
     # A positive definite; the kept rows clearly independent: in the band around a singular position (where the dense
