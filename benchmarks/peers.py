@@ -121,6 +121,12 @@ def gausspp_rows(scene: gp.scenes.Scene, args: argparse.Namespace) -> list[Row]:
         row.steps = run().steps
         row.per_step_us = row.wall_ms * 1e3 / row.steps
         rows.append(row)
+    for label, kw in (("default", {}), ("default, direct", {"solver": "direct"})):
+        run = lambda kw=kw: gp.simulate(model, q0, v0, t_end, **kw)  # noqa: E731
+        row = timed_run(f"gausspp simulate {label} (no dt)", run, error, args)
+        row.steps = run().steps
+        row.per_step_us = row.wall_ms * 1e3 / row.steps
+        rows.append(row)
     lam = np.zeros(model.n_lam)
     for solver in ("direct", "qp"):
         call = lambda s=solver: model.step(0.0, q0, v0, lam, solver=s)  # noqa: E731
@@ -253,14 +259,16 @@ def print_table(rows: list[Row]) -> None:
 
 
 def print_ratios(rows: list[Row]) -> None:
-    """The ratios of issue 17's acceptance (targets: ≤ 0.5, ≤ 1.0, ≤ 3)."""
+    """The ratios of issue 17's acceptance (targets: ≤ 0.5, ≤ 1.0, ≤ 3) and issue 30's (the default call, ≤ 0.2)."""
     by = {r.what: r for r in rows}
     mj = by.get("MuJoCo RK4 connect, stiffest")
     pc = by.get("Pinocchio constraintDynamics (one call)")
-    print("\nratios (issue 17 acceptance):")
+    print("\nratios (issues 17 and 30):")
     for label, num, den, target in (
         ("gp.simulate rk4 direct / MuJoCo RK4 (stiffest) wall", "gausspp simulate rk4 direct", mj, 0.5),
         ("gp.simulate rk4 qp     / MuJoCo RK4 (stiffest) wall", "gausspp simulate rk4 qp", mj, 1.0),
+        ("gp.simulate default (no dt) / MuJoCo RK4 (stiffest) wall", "gausspp simulate default (no dt)", mj, 0.2),
+        ("gp.simulate default, direct / MuJoCo RK4 (stiffest) wall", "gausspp simulate default, direct (no dt)", mj, 0.2),
         ("model.step direct / one Pinocchio constraintDynamics", "gausspp model.step direct (one call)", pc, 3.0),
         ("model.step qp     / one Pinocchio constraintDynamics", "gausspp model.step qp (one call)", pc, 3.0),
     ):
@@ -270,6 +278,30 @@ def print_ratios(rows: list[Row]) -> None:
         field = "per_step_us" if den is pc else "wall_ms"
         ratio = getattr(by[num], field) / getattr(den, field)
         print(f"  {label}: {ratio:6.2f}   target ≤ {target:g}: {'met' if ratio <= target else 'NOT met'}")
+
+
+def print_agreement(scene: gp.scenes.Scene) -> None:
+    """The compiled DOP853 stages (gausspp.simulation.compiled_adaptive) against scipy's own DOP853 with the same
+    right-hand side and tolerances: the states at 21 record times, relative to the state's size (issue 30: ≤ 1e-12)."""
+    import scipy.integrate as si
+
+    from gausspp.simulation import compiled_adaptive
+    from gausspp.simulation.drift import Stabilization
+    from gausspp.simulation.initial import initial_state
+    from gausspp.simulation.rhs import RightHandSide
+
+    m = scene.model
+    q, v, lam = initial_state(m, 0.0, scene.q0, scene.v0, None)
+    y0 = np.concatenate([q, v, lam, [0.0, 0.0]])
+    times = np.linspace(0.0, scene.t_end, 21)[1:]
+    for solver in ("direct", "qp"):
+        rhs = RightHandSide(m, solver, None, Stabilization())
+        out = []
+        for cls in (si.DOP853, compiled_adaptive.solver_class("DOP853", rhs)):
+            run = si.solve_ivp(rhs, (0.0, scene.t_end), y0, method=cls, t_eval=times, rtol=1e-10, atol=1e-12)
+            out.append(run.y.T)
+        diff = float(np.abs(out[0] - out[1]).max() / (1.0 + np.abs(out[0]).max()))
+        print(f"\ncompiled DOP853 vs scipy's DOP853 ({solver}, rtol 1e-10, atol 1e-12): {diff:.1e} relative (≤ 1e-12)")
 
 
 def figure(rows: list[Row], path: str) -> None:
@@ -310,6 +342,7 @@ def main() -> None:
     print(f"P2 pendulum, T = {P2['t_end']:g} s, dt = {DT:g} ({STEPS} steps); {versions}")
     print_table(rows)
     print_ratios(rows)
+    print_agreement(scene)
     if args.figure:
         figure(rows, args.figure)
 

@@ -83,11 +83,29 @@ def _reached(values: np.ndarray, early: int) -> np.ndarray:
 
 
 def _kinetic(model: Model, t: np.ndarray, y: np.ndarray, n: int) -> np.ndarray:
-    """``½ vᵀ A v`` at up to :data:`KINETIC_SAMPLES` samples of the first ``n`` (0 at the others)."""
-    nq, nv, nl = model.nq, model.nv, model.n_lam
+    """``½ vᵀ A v`` at up to :data:`KINETIC_SAMPLES` samples of the first ``n`` (0 at the others): one call of the
+    mapped kinetic energy (kept in the model's workspace)."""
+    nq, nv = model.nq, model.nv
     kinetic = np.zeros(n)
-    for i in np.unique(np.linspace(0, n - 1, min(n, KINETIC_SAMPLES)).astype(int)):
-        q, v, lam = y[i, :nq], y[i, nq : nq + nv], y[i, nq + nv : nq + nv + nl]
-        if np.all(np.isfinite(q)) and np.all(np.isfinite(v)):
-            kinetic[i] = 0.5 * float(v @ model.evaluate_data(float(t[i]), q, v, lam).A @ v)
+    idx = np.unique(np.linspace(0, n - 1, min(n, KINETIC_SAMPLES)).astype(int))
+    states = np.zeros((nq + nv + 1, KINETIC_SAMPLES))
+    states[0, : idx.size] = t[idx]
+    states[1:, : idx.size] = y[idx, : nq + nv].T
+    states[:, idx.size :] = states[:, :1]
+    good = np.isfinite(states).all(axis=0)
+    states[:, ~good] = 0.0
+    values = np.array(_kinetic_function(model)(states)).ravel()
+    kinetic[idx] = np.where(good[: idx.size], values[: idx.size], 0.0)
     return np.nan_to_num(kinetic, nan=0.0, posinf=0.0)
+
+
+def _kinetic_function(model: Model) -> ca.Function:
+    """``[t; q; v]`` (one column per sample, :data:`KINETIC_SAMPLES` of them) ``↦ ½ vᵀ A(q, t) v`` per column."""
+
+    def build() -> ca.Function:
+        mech = model.mechanism
+        state = ca.vertcat(mech.t, mech.q, mech.v)
+        one = ca.Function("kinetic", [state], [0.5 * ca.dot(mech.v, ca.mtimes(mech.A, mech.v))])
+        return one.map(KINETIC_SAMPLES)
+
+    return workspace(model).get(("kinetic energy, mapped",), build)

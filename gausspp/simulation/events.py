@@ -24,11 +24,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import scipy.integrate as si
 
 from ..errors import GaussppError, InitialDataError, IntegrationError
 from ..model.model import Model
-from . import lanes, recording
+from . import compiled_adaptive, lanes, recording
 from . import methods as _methods
 from .contacts import active_set, gaps, phase_step
 from .drift import Stabilization, as_stabilization
@@ -199,7 +198,7 @@ class EventRun:
         )
         phase = len(self.phases) - 1
         try:
-            solver = getattr(si, opts.method.name)(rhs, t, y, opts.t_end, **options)
+            solver = compiled_adaptive.solver_class(opts.method.name, rhs)(rhs, t, y, opts.t_end, **options)
             while solver.status == "running":
                 t_old = solver.t
                 message = solver.step()

@@ -10,12 +10,11 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-import scipy.integrate as si
 
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError
 from ..model.model import Model
 from ..workspace import workspace
-from . import crossing, inputs
+from . import compiled_adaptive, crossing, inputs
 from . import methods as _methods
 from .compiled import rhs_function
 from .drift import Stabilization
@@ -113,7 +112,8 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
         options.update(first_step=opts.dt, max_step=opts.dt)
     if meth.name in ("Radau", "BDF"):  # implicit methods: the exact Jacobian from casadi where it exists
         options["jac"] = jacobian(rhs)
-    solver = getattr(si, meth.name)(rhs, t0, y0, opts.t_end, **options)
+    Solver = compiled_adaptive.solver_class(meth.name, rhs)  # noqa: N806  # a class
+    solver = Solver(rhs, t0, y0, opts.t_end, **options)
     watch = crossing.SingularityWatch(model, t0, y0, rhs) if crossing.applies(model) else None
     events: list[dict[str, Any]] = []
     times = None if np.isscalar(opts.record) else np.sort(np.asarray(opts.record, float))  # checked by check_record
@@ -157,11 +157,11 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
         try:
             plan = watch.observe(solver.t, solver.y, solver.dense_output)
             if isinstance(plan, crossing.Approach):  # step to the point the bridge starts from
-                solver = getattr(si, meth.name)(rhs, solver.t, solver.y, plan.t, **options)
+                solver = Solver(rhs, solver.t, solver.y, plan.t, **options)
                 continue
             if not isinstance(plan, crossing.Cross):
                 if solver.status == "finished":  # an approach point was reached, the bridge not needed: go on
-                    solver = getattr(si, meth.name)(rhs, solver.t, solver.y, opts.t_end, **options)
+                    solver = Solver(rhs, solver.t, solver.y, opts.t_end, **options)
                 continue
             over = crossing.bridge(rhs, model, projection(model, redundant), solver.t, solver.y, plan.t, opts.t_end)
         except GaussppError as exc:
@@ -174,7 +174,7 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
         if over.t >= opts.t_end:
             break
         watch.restart(over.t, over.y)
-        solver = getattr(si, meth.name)(rhs, over.t, over.y, opts.t_end, **options)
+        solver = Solver(rhs, over.t, over.y, opts.t_end, **options)
     if failure is not None and times is not None and (not ts or solver.t > ts[-1]):
         ts.append(float(solver.t))  # a failed run keeps the last state it reached, between the record times
         ys.append(np.asarray(solver.y).copy())

@@ -1,0 +1,146 @@
+"""The adaptive default compiled (gausspp.simulation.compiled_adaptive) against scipy's own solver at the same
+tolerances: the same steps to round-off, the same states at the record times, the same failures."""
+
+from __future__ import annotations
+
+import re
+
+import casadi as ca
+import numpy as np
+import pytest
+import scipy.integrate as si
+
+import gausspp as gp
+from gausspp.simulation import compiled_adaptive
+from gausspp.simulation.drift import Stabilization
+from gausspp.simulation.initial import initial_state
+from gausspp.simulation.rhs import RightHandSide
+from gausspp.step.bound import Bound
+
+#: (scene, parameters, step solver): equality rows (direct and the QP in the graph), λ-states of an inertial
+#: realization, a mixed realization, Andrews' squeezing mechanism (six rows).
+CASES = [
+    ("pendulum", {}, "direct"),
+    ("pendulum", {}, "qp"),
+    ("gyrostat", {}, "direct"),
+    ("mixed-rate", {}, "qp"),
+    ("andrews", {}, "direct"),
+]
+
+
+def _start(name: str, params: dict, solver: str) -> tuple[RightHandSide, np.ndarray, float]:
+    scene = gp.scenes.get(name, **params)
+    m = scene.model
+    q, v, lam = initial_state(m, 0.0, scene.q0, scene.v0, None)
+    return RightHandSide(m, solver, None, Stabilization()), np.concatenate([q, v, lam, [0.0, 0.0]]), scene.t_end
+
+
+def _run(cls: type, rhs: RightHandSide, y0: np.ndarray, t_end: float, times: np.ndarray) -> tuple[int, np.ndarray]:
+    """Steps to ``t_end``; the states at ``times`` from each step's dense output."""
+    solver = cls(rhs, 0.0, y0, t_end, rtol=1e-10, atol=1e-10)
+    out, steps = np.empty((times.size, y0.size)), 0
+    while solver.status == "running":
+        t_old = solver.t
+        solver.step()
+        assert solver.status != "failed"
+        steps += 1
+        inside = (times > t_old) & (times <= solver.t)
+        if inside.any():
+            out[inside] = np.asarray(solver.dense_output()(times[inside])).T
+    return steps, out
+
+
+@pytest.mark.parametrize(("name", "params", "solver"), CASES)
+@pytest.mark.parametrize("method", ["DOP853", "RK45"])
+def test_each_compiled_step_is_scipys_step(name: str, params: dict, solver: str, method: str) -> None:
+    """Along scipy's own run, every accepted step taken again by the compiled stages from the same ``(t, y, f, h)``:
+    the new state and every stage to round-off of their size, the error norm to the round-off it carries (its
+    estimate is a difference of nearly equal stages divided by ``atol + rtol|y|``)."""
+    rhs, y0, t_end = _start(name, params, solver)
+    assert compiled_adaptive.applies(method, rhs)
+    ref = getattr(si, method)(rhs, 0.0, y0, min(t_end, 2.0), rtol=1e-10, atol=1e-10)
+    new = compiled_adaptive.solver_class(method, rhs)(rhs, 0.0, y0, min(t_end, 2.0), rtol=1e-10, atol=1e-10)
+    steps = 0
+    while ref.status == "running":
+        t, y, f = ref.t, ref.y.copy(), ref.f.copy()
+        ref.step()
+        h = ref.t - t
+        y_new, f_new, error = new.stages(t, y, f, h)
+        scale = ref.atol + np.maximum(np.abs(y), np.abs(ref.y)) * ref.rtol
+        error_ref = ref._estimate_error_norm(ref.K, h, scale)
+        assert np.abs(y_new - ref.y).max() <= 1e-13 * (1 + np.abs(ref.y).max())
+        assert np.abs(new.K - ref.K).max() <= 1e-12 * (1 + np.abs(ref.K).max())
+        assert abs(error - error_ref) <= 1e-3 * max(error_ref, 1e-2)
+        steps += 1
+    assert steps >= 5
+
+
+@pytest.mark.parametrize(("name", "params", "solver"), CASES)
+def test_whole_runs_agree_with_scipys_within_their_tolerance(name: str, params: dict, solver: str) -> None:
+    """Whole DOP853 runs, compiled and scipy's, at 25 times: within ten times ``rtol`` of the state's size — the
+    same method at the same tolerances (``benchmarks/peers.py`` prints the measured agreement, ~1e-13)."""
+    rhs, y0, t_end = _start(name, params, solver)
+    t_end = min(t_end, 2.0)
+    times = np.linspace(0.0, t_end, 26)[1:]
+    n_ref, ref = _run(si.DOP853, rhs, y0, t_end, times)
+    n_new, new = _run(compiled_adaptive.solver_class("DOP853", rhs), rhs, y0, t_end, times)
+    assert abs(n_new - n_ref) <= max(2, n_ref // 20)
+    assert np.abs(new - ref).max() <= 10 * 1e-10 * (1 + np.abs(ref).max())
+
+
+def test_a_wrong_tableau_is_told_apart(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The whole-run comparison catches compiled stages with one weight off by 1e-3 (a hundredfold beyond its
+    tolerance): the negative control; the step comparison's tolerance is tighter still."""
+    rhs, y0, _ = _start("pendulum", {}, "direct")
+    times = np.linspace(0.0, 1.0, 11)[1:]
+    _, ref = _run(si.DOP853, rhs, y0, 1.0, times)
+    monkeypatch.setattr(si.DOP853, "B", si.DOP853.B * (1 + 1e-3 * (np.arange(12) == 5)))
+    wrong_stages = compiled_adaptive._build(rhs.model, "DOP853", rhs.kernel)
+    monkeypatch.undo()
+
+    class Wrong(compiled_adaptive.CompiledDOP853):
+        def setup(self, rhs: RightHandSide, method: str) -> None:
+            super().setup(rhs, method)
+            rtol, atol = self._bound.args[5][0], self._bound.args[6].copy()
+            self._bound = Bound(wrong_stages)
+            self._bound.args[5][0], self._bound.args[6][:] = rtol, atol
+
+    _, wrong = _run(Wrong, rhs, y0, 1.0, times)
+    assert np.abs(wrong - ref).max() > 100 * 10 * 1e-10 * (1 + np.abs(ref).max())
+
+
+def test_simulate_takes_the_compiled_stages_and_gives_scipys_trajectory() -> None:
+    """``gp.simulate``'s default lane at the record times, against scipy's DOP853 stepped from the same right-hand
+    side; the evaluations are counted as scipy counts them (12 per DOP853 step)."""
+    scene = gp.scenes.get("pendulum")
+    times = np.linspace(0.0, 2.0, 21)
+    traj = gp.simulate(scene.model, scene.q0, scene.v0, 2.0, record=times, rtol=1e-10, atol=1e-10, solver="direct")
+    rhs, y0, _ = _start("pendulum", {}, "direct")
+    _, ref = _run(si.DOP853, rhs, y0, 2.0, times[1:])
+    nq, nv = scene.model.nq, scene.model.nv
+    assert np.abs(traj.q[1:] - ref[:, :nq]).max() <= 1e-12 * (1 + np.abs(ref).max())
+    assert np.abs(traj.v[1:] - ref[:, nq : nq + nv]).max() <= 1e-12 * (1 + np.abs(ref).max())
+    assert traj.rhs_evaluations >= 12 * traj.steps
+
+
+def _failure_time(traj: gp.Trajectory) -> float:
+    return float(re.search(r"at t=([0-9.]+)", traj.message).group(1))  # type: ignore[union-attr]
+
+
+def test_a_stage_that_fails_hands_the_step_to_python_which_names_the_failure(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A mass matrix that stops being positive definite at t = 1: the compiled flag goes down, scipy's stages in
+    Python raise the project error — the same error, at the same stage, as the scipy lane without compiled stages
+    (a swinging coordinate, so that the error estimate is the motion's and not round-off: the same steps)."""
+    body = gp.Lagrangian(
+        n=2, T=lambda q, v, t: 0.5 * (1.0 - t) * v[0] ** 2 + 0.5 * v[1] ** 2, V=lambda q, t: 1 - ca.cos(q[1])
+    )
+    model = gp.Model(body, [gp.Holonomic(lambda q, t: q[0] - q[1], name="line")])
+    traj = gp.simulate(model, [0.0, 0.0], [1.0, 1.0], 2.0, throw=False)
+    assert traj.status == "failed"
+    assert isinstance(traj.failure, gp.NotPositiveDefiniteError)
+    assert _failure_time(traj) > 1.0 > traj.t[-1]
+    monkeypatch.setattr(compiled_adaptive, "applies", lambda method, rhs: False)
+    plain = gp.simulate(gp.Model(body, list(model.constraints)), [0.0, 0.0], [1.0, 1.0], 2.0, throw=False)
+    assert type(plain.failure) is type(traj.failure)
+    assert abs(_failure_time(plain) - _failure_time(traj)) <= 1e-5
+    assert plain.t.size == traj.t.size  # the steps' times agree to the error norm's round-off, not bitwise
