@@ -32,6 +32,8 @@ class DemoRun(NamedTuple):
     stderr: str
     returncode: int
     out: Path
+    #: stdout and stderr in one stream, in the order a terminal shows them (both unbuffered)
+    merged: str
 
 
 @pytest.fixture(scope="session")
@@ -39,6 +41,14 @@ def demo_run(tmp_path_factory: pytest.TempPathFactory) -> DemoRun:
     """`gausspp demo` by the real entry point, once per test session (it takes about a minute)."""
     out = tmp_path_factory.mktemp("demo")
     result = subprocess.run(
-        [sys.executable, "-m", "gausspp.cli", "demo", "--out", str(out)], capture_output=True, text=True, timeout=900
+        [sys.executable, "-m", "gausspp.cli", "demo", "--out", str(out)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        timeout=900,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
     )
-    return DemoRun(result.stdout, result.stderr, result.returncode, out)
+    merged = result.stdout
+    progress = [line for line in merged.splitlines() if line.startswith("gausspp demo: ")]
+    stdout = "\n".join(line for line in merged.splitlines() if not line.startswith("gausspp demo: ")) + "\n"
+    return DemoRun(stdout, "\n".join(progress) + "\n", result.returncode, out, merged)

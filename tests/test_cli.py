@@ -148,7 +148,7 @@ def test_report_figures_state_the_scene_parameters(tmp_path: Path, monkeypatch: 
 
 
 def test_demo_by_the_real_entry_point(demo_run) -> None:
-    assert demo_run.returncode == 0, demo_run.stderr
+    assert demo_run.returncode == 0, demo_run.merged
     assert "Every scene" in demo_run.stdout
     for name in gp.scenes.names("equality"):
         assert f"\n{name} " in demo_run.stdout

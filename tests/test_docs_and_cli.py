@@ -52,7 +52,7 @@ def test_example_runs(script: str, tmp_path: Path) -> None:
 def test_demo_table(demo_run) -> None:
     import gausspp as gp
 
-    assert demo_run.returncode == 0, demo_run.stderr
+    assert demo_run.returncode == 0, demo_run.merged
     out = demo_run.stdout
     first = out.split("Every scene")[0].splitlines()
     step_rows = [line for line in first if line.startswith(("two-masses", "rigid-body-servo"))]
@@ -63,6 +63,37 @@ def test_demo_table(demo_run) -> None:
     for name in gp.scenes.names("equality"):  # every scene: QP ≡ direct along the run, and a motion by (23)
         row = scene_rows[name]
         assert row[-2] == "yes" and float(row[-6]) < 1e-12
+
+
+def _tables(text: str) -> list[list[str]]:
+    """Each table of the demo's output: its header, its dashes, its rows (to the first blank line)."""
+    lines = text.splitlines()
+    out = []
+    for i, line in enumerate(lines):
+        if line and set(line) == {"-"} and i > 0:
+            end = next((j for j in range(i + 1, len(lines)) if not lines[j].strip()), len(lines))
+            out.append(lines[i - 1 : end])
+    return out
+
+
+def test_demo_tables_are_whole_aligned_and_say_their_units(demo_run) -> None:
+    """Issue 30, item 5: in the stream a terminal shows, no progress line falls inside a table; every row is as
+    wide as its header's columns (no label pushes them out of line); units and a legend for every column."""
+    assert demo_run.returncode == 0, demo_run.merged
+    tables = _tables(demo_run.merged)
+    assert len(tables) == 3
+    for table in tables:
+        header, _dashes, *rows = table
+        assert rows and not any(r.startswith("gausspp demo: ") for r in rows), table
+        assert all(len(r) == len(header) for r in rows), [r for r in rows if len(r) != len(header)]
+    step, scene, general = (t[0] for t in tables)
+    assert "acceleration (SI)" in step and "µs/step" in step
+    assert "T (s)" in scene and "run ms" in scene and "T (s)" in general
+    out = demo_run.stdout
+    for legend in ("acceleration (SI): ", "multiplier: ", "T: the run's length", "energy bal.:", "run ms: ", "— : no"):
+        assert legend in out, legend
+    assert "(saturated-crane) it is" in out and "by design" in out  # its residual explained
+    assert not any("{" in line for line in demo_run.stderr.splitlines())  # no raw dicts in the progress lines
 
 
 def test_scenes_listing(capsys: pytest.CaptureFixture[str]) -> None:

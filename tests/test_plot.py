@@ -454,3 +454,22 @@ def test_contacts_legend_does_not_contradict_the_restitution(
     texts = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert not any("e = 0" in t for t in texts)  # a plastic impact is a slow one, not a run with e = 0
     assert f"e = {scene.params['e']}" in fig.get_suptitle()
+
+
+def test_a_figure_of_many_components_stays_readable(tmp_path: Path) -> None:
+    """Issue 30, item 5: the 32-link chain's 96 coordinates — no legend of 96 entries over the axes but a colour
+    scale from the first component to the last and a note naming them; every component its own colour. A few
+    components keep the legend (the negative control)."""
+    chain = gp.scenes.get("planar-chain", N=32)
+    traj = gp.simulate(chain.model, chain.q0, chain.v0, 0.02)
+    fig = plot.trajectory(traj, names=chain.coordinates, v_labels=chain.velocity_names)
+    q_ax, v_ax = fig.axes[0], fig.axes[1]
+    for ax in (q_ax, v_ax):
+        assert ax.get_legend() is None
+        assert any("96 curves" in t.get_text() for t in ax.texts)
+    assert len({tuple(line.get_color()) for line in q_ax.get_lines()}) == 96
+    assert sum(ax.get_label() == "<colorbar>" for ax in fig.axes) == 2
+    fig.savefig(tmp_path / "chain.png")
+    few = gp.scenes.get("planar-chain", N=2)
+    small = plot.trajectory(gp.simulate(few.model, few.q0, few.v0, 0.02), names=few.coordinates)
+    assert small.axes[0].get_legend() is not None and len(small.axes[0].get_legend().get_texts()) == 6

@@ -46,7 +46,7 @@ def _print(lines: Iterable[str]) -> None:
 def demo(args: argparse.Namespace) -> int:
     """Two masses, rod vs servo, and the rigid-body servo: QP vs direct, table and timings; every scene;
     the general Gauss QP's scenes; the teaching figures. The rows run on worker processes; each table
-    prints as soon as its rows are ready, with a line per finished row (and a bar) on stderr."""
+    prints whole as soon as its rows are ready, with a line per finished row (and a bar) on stderr between tables."""
     which = demo_study.backends()
     plan = demo_run.plan(which, Path(args.out))
     counts = Counter(task.table for task in plan)
@@ -59,7 +59,7 @@ def demo(args: argparse.Namespace) -> int:
             tables.scene_lines(islice(results, counts["scene"]), qp.DEFAULT),
             tables.general_lines(which, demo_run.general_rows(which, islice(results, counts["general"]))),
         ):
-            for line in lines:
+            for line in list(lines):  # the whole table first: progress lines come between tables, never inside
                 progress.emit(line)
         try:
             written = list(islice(results, counts["figures"]))

@@ -39,6 +39,21 @@ def palette(i: int) -> str:
     return OKABE_ITO[i % len(OKABE_ITO)]
 
 
+#: Above this many labelled curves in one panel the legend gives way to a colour scale by component (a legend of
+#: 96 entries would cover the axes).
+LEGEND_MAX = 12
+#: The colour scale of many components (perceptually uniform, readable in grey).
+MANY = "viridis"
+
+
+def component_color(i: int, n: int) -> Any:
+    """Component ``i`` of ``n``: its Okabe–Ito colour while they are few, else its place on the :data:`MANY` scale
+    from the first component to the last (so that neighbours in a chain are neighbours in colour)."""
+    if n <= len(OKABE_ITO):
+        return palette(i)
+    return pyplot().get_cmap(MANY)(i / max(n - 1, 1))
+
+
 def as_runs(obj: Any, what: str, needs: tuple[str, ...] = ("t",)) -> dict[str, Any]:
     """One object or a mapping ``label → object`` as a dict (label ``""`` for a lone object); each must have the
     attributes ``needs`` (a trajectory's ``t``, ``q``, ``v`` …), else an error naming what was given."""
@@ -80,11 +95,24 @@ def suffix(name: str, traj: Any = None) -> str:
     return f" ({inner})" if inner else ""
 
 
-def legend(ax: Any) -> None:
-    """A legend sized to the number of labelled artists (none if there are none)."""
-    n = len(ax.get_legend_handles_labels()[1])
-    if n:
+def legend(ax: Any, components: int | None = None) -> None:
+    """A legend sized to the number of labelled artists (none if there are none). Beyond :data:`LEGEND_MAX` of them,
+    a colour bar from the first component to the last (``components`` of them, coloured by
+    :func:`component_color`) and a note naming the first and the last instead."""
+    names = ax.get_legend_handles_labels()[1]
+    n = len(names)
+    if not n:
+        return
+    if n <= LEGEND_MAX:
         ax.legend(fontsize=8 if n <= 8 else 6, ncol=1 if n <= 6 else 2, loc="best")
+        return
+    count = components or n
+    if count > len(OKABE_ITO):
+        plt = pyplot()
+        scale = plt.cm.ScalarMappable(cmap=MANY, norm=plt.Normalize(1, count))
+        ax.figure.colorbar(scale, ax=ax, label="component", fraction=0.05, pad=0.02)
+    note = f"{n} curves: {names[0]} … {names[-1]}"
+    ax.text(0.01, 0.99, note, transform=ax.transAxes, va="top", fontsize=7, bbox=dict(fc="white", alpha=0.7, lw=0))
 
 
 def vec(v: np.ndarray) -> str:

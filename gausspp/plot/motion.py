@@ -9,7 +9,19 @@ import numpy as np
 
 from ..errors import InputError, ShapeError
 from ..scenes.scene import velocity_names
-from .base import MARGIN_WARN, MARKERS, STYLES, as_runs, carried_names, labels, legend, palette, pyplot, suffix
+from .base import (
+    MARGIN_WARN,
+    MARKERS,
+    STYLES,
+    as_runs,
+    carried_names,
+    component_color,
+    labels,
+    legend,
+    palette,
+    pyplot,
+    suffix,
+)
 
 
 def _same_sizes(runs: Mapping[str, Any], phase: bool) -> tuple[int, int]:
@@ -33,7 +45,7 @@ def _difference_panels(axes: Any, runs: Mapping[str, Any], ql: Sequence[str], vl
     for ax, xa, xb, names, what in ((axes[0], a.q, b.q, ql, "coordinates"), (axes[1], a.v, b.v, vl, "velocities")):
         for i in range(xa.shape[1]):
             diff = np.interp(a.t, b.t, xb[:, i]) - xa[:, i]
-            ax.plot(a.t, diff, STYLES[i % len(STYLES)], color=palette(i), label=f"Δ{names[i]}")
+            ax.plot(a.t, diff, STYLES[i % len(STYLES)], color=component_color(i, len(names)), label=f"Δ{names[i]}")
         ax.axhline(0.0, color="k", lw=0.6)
         ax.set(xlabel="time t (s)", ylabel=f"Δ {what}", title=f"difference of the {what}: {nb} − {na}")
 
@@ -43,14 +55,16 @@ def _run_lines(axes: Any, runs: Mapping[str, Any], ql: Sequence[str], vl: Sequen
     for r, (name, tr) in enumerate(runs.items()):
         ls, sfx = STYLES[r % len(STYLES)], suffix(name, tr)
         mark = dict(marker=MARKERS[r % len(MARKERS)], markevery=max(1, tr.t.size // 12), ms=5) if len(runs) > 1 else {}
-        for i in range(tr.q.shape[1]):
-            axes[0].plot(tr.t, tr.q[:, i], ls, color=palette(i), label=ql[i] + sfx, **mark)
-        for i in range(tr.v.shape[1]):
-            axes[1].plot(tr.t, tr.v[:, i], ls, color=palette(i), label=vl[i] + sfx, **mark)
+        nq, nv = tr.q.shape[1], tr.v.shape[1]
+        for i in range(nq):
+            axes[0].plot(tr.t, tr.q[:, i], ls, color=component_color(i, nq), label=ql[i] + sfx, **mark)
+        for i in range(nv):
+            axes[1].plot(tr.t, tr.v[:, i], ls, color=component_color(i, nv), label=vl[i] + sfx, **mark)
         if phase:
-            for i in range(tr.q.shape[1]):
-                axes[2].plot(tr.q[:, i], tr.v[:, i], ls, color=palette(i), label=f"({ql[i]}, {vl[i]}){sfx}")
-                axes[2].plot(tr.q[0, i], tr.v[0, i], "o", color=palette(i), ms=4)
+            for i in range(nq):
+                color = component_color(i, nq)
+                axes[2].plot(tr.q[:, i], tr.v[:, i], ls, color=color, label=f"({ql[i]}, {vl[i]}){sfx}")
+                axes[2].plot(tr.q[0, i], tr.v[0, i], "o", color=color, ms=4)
 
 
 def trajectory(
@@ -120,9 +134,10 @@ def trajectory(
         axes += list(grid[1][:2])
         if phase:
             fig.delaxes(grid[1][2])
-    for ax in axes:
+    counts = [nq, nv, *([nq] if phase else []), *([nq, nv] if difference else [])]
+    for ax, count in zip(axes, counts, strict=True):
         ax.grid(True, alpha=0.3)
-        legend(ax)
+        legend(ax, count)
     if title:
         fig.suptitle(title)
     return fig

@@ -227,7 +227,8 @@ def _features(model: Model, traj: Trajectory) -> str:
         f"{model.m} actuators, {model.k} row(s)" if model.m > model.k else "",
         "redundant rows" if redundant else "",
     ]
-    return ", ".join(f for f in features if f)
+    # otherwise its rows are independent but for isolated instants (a parallelogram's collinear positions)
+    return ", ".join(f for f in features if f) or "rank drops at instants"
 
 
 def _on_grid_gap(run: Trajectory, other: Trajectory, grid: np.ndarray) -> float:

@@ -34,7 +34,7 @@ class Task:
 def plan(which: demo.Backends, out: Path) -> list[Task]:
     """The demo's tasks in the tables' order: the one-step pairs, every scene, the general-QP scenes, the figures."""
     steps = [
-        Task("step", f"{name} {params or ''}".strip(), demo.step_pair, (i,))
+        Task("step", " ".join([name, *(f"{k}={v}" for k, v in (params or {}).items())]), demo.step_pair, (i,))
         for i, (name, params) in enumerate(demo.STEP_CASES)
     ]
     equality = [Task("scene", name, demo.scene_row, (name,)) for name in scenes.names("equality")]
