@@ -1,6 +1,6 @@
 """Every claim of the README and of docs/ is checked.
 
-* Each ```python block of ``README.md`` and ``docs/guide.md`` runs on its own, in a fresh
+* Each ```python block of ``README.md``, ``docs/guide.md`` and ``docs/index.md`` (the site's front page) runs on its own, in a fresh
   interpreter, in a temporary directory, with a non-interactive matplotlib backend. Its expected
   output is written as comment lines ``# → ...`` after the code: the run must print exactly those
   lines up to the numbers, and each claimed number must be the printed one rounded to the digits
@@ -33,7 +33,7 @@ from gausspp.cli.parser import build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
-RUNNABLE = [README, ROOT / "docs" / "guide.md"]
+RUNNABLE = [README, ROOT / "docs" / "guide.md", ROOT / "docs" / "index.md"]
 DOCS = [*RUNNABLE, ROOT / "docs" / "theory.md"]
 
 FENCE = re.compile(r"^```(\w*)\n(.*?)^```", re.S | re.M)
@@ -157,7 +157,15 @@ def _sweeps(claims: list[list[Number]]) -> None:
 
 
 #: Blocks with a closed form, found by a phrase of their code: the claims must agree with it.
+def _two_masses_run(claims: list[list[Number]]) -> None:
+    """The docs' front page: from rest for 1 s, the rod's masses at F/(m1+m2)·1 s, the motor's at F/m2·1 s."""
+    m1, m2, F = 1.0, 3.0, 2.0
+    for claim, speed in zip(claims, (F / (m1 + m2), F / m2), strict=True):
+        assert len(claim) == 2 and all(c.admits(speed) for c in claim), (claim, speed)
+
+
 CLOSED_FORMS: dict[str, Callable[[list[list[Number]]], None]] = {
+    "traj = gp.simulate(model, [0.0, 1.0], [0.0, 0.0], 1.0)": _two_masses_run,
     "realization=gp.Force(M=lambda q, v, t: [1, 0])": _two_masses,
     'gp.Unilateral(lambda q, t: q[1], name="floor", restitution=0.5)': _ball,
     "gp.sweep(realizability_task": _sweeps,
