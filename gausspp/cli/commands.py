@@ -221,18 +221,38 @@ def plain(text: str) -> str:
 
 
 def list_scenes(args: argparse.Namespace) -> int:
-    """Every scene with a one-line description, or one scene's description and parameters."""
+    """Every scene with a one-line description, or one scene's description and, for each parameter, its type,
+    default and unit on one line, then its meaning and allowed values below (the builder's "Parameters")."""
+    import textwrap
+
+    from ..scenes import parameter_docs
+
     if args.name is None:
         for name, line in scenes.describe().items():
             print(f"{name:20s} {plain(line)}")
         return EXIT_OK
     builder = scenes._builder(args.name)
-    doc = plain(inspect.getdoc(builder) or "")
+    doc = plain(parameter_docs.without_parameters(inspect.getdoc(builder)))
     print(f"{args.name}: {doc}\n\nparameters (gausspp run {args.name} --param KEY=VALUE):")
-    for key, param in scenes.parameters(args.name).items():
-        ann = param.annotation
-        kind = ann if isinstance(ann, str) else " | ".join(sorted(parameter_kinds(param))) or "any"
-        print(f"  {key:16s} {kind:14s} default {param.default!r}")
+    params, docs = scenes.parameters(args.name), parameter_docs.describe(args.name)
+    kinds = {key: plain(d.kind) or " | ".join(sorted(parameter_kinds(params[key]))) or "any" for key, d in docs.items()}
+    defaults = {key: f"default {d.default!r}" for key, d in docs.items()}
+    widths = [max(map(len, column), default=0) for column in (docs, kinds.values(), defaults.values())]
+    for key, d in docs.items():
+        unit = f"({d.unit})" if d.unit else "(unit not documented)"
+        print(f"  {key:{widths[0]}s}  {kinds[key]:{widths[1]}s}  {defaults[key]:{widths[2]}s}  {unit}".rstrip())
+        body = [plain(d.meaning) or "(not documented)", f"allowed: {plain(d.allowed) or 'not documented'}"]
+        for text in body:
+            print(
+                textwrap.fill(
+                    text,
+                    100,
+                    initial_indent=" " * 6,
+                    subsequent_indent=" " * 8,
+                    break_on_hyphens=False,
+                    break_long_words=False,
+                )
+            )
     return EXIT_OK
 
 

@@ -315,6 +315,11 @@ def build(t_end: float = REFERENCE_T) -> Scene:
     published consistent values (``q̇(0) = 0``). No closed form (``exact = None``); the reference
     is the published solution at ``t = 0.03`` (:data:`REFERENCE_Q`, angles good to 1.4e-9) and
     the converged :data:`CONVERGED_Q`; see the module docstring.
+
+    Parameters
+    ----------
+    t_end : float
+        Suggested horizon of a simulation; the published reference is at 0.03 s (s). Allowed: > 0.
     """
     if not (np.isfinite(t_end) and t_end > 0):
         raise InputError(f"andrews: t_end must be positive, got {t_end}")

@@ -51,7 +51,31 @@ def build(
     vx: float = 0.0,
     t_end: float = 3.0,
 ) -> Scene:
-    """Planar block dropped on a floor: its corners bounce with restitution e, then it rests."""
+    """Planar block dropped on a floor: its corners bounce with restitution e, then it rests.
+
+    Parameters
+    ----------
+    m : float
+        Mass of the block (kg). Allowed: > 0.
+    w : float
+        Width of the block (m). Allowed: > 0.
+    h : float
+        Height of the block (m). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−z`` (m/s²). Allowed: > 0.
+    e : float
+        Coefficient of restitution of the corners' impacts on the floor (-). Allowed: 0 ≤ e ≤ 1.
+    drop : float
+        Initial height of the lowest corner above the floor; the block starts with zero vertical speed (m).
+        Allowed: ≥ 0.
+    tilt : float
+        Initial angle of the block; 0: level, it bounces like a point mass (the exact motion is known) (rad).
+        Allowed: |tilt| < π/2.
+    vx : float
+        Initial horizontal velocity (m/s). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
+    """
     _check(m, w, h, g, e, drop, tilt, t_end)
     model = _block(m, w, h, g, e)
     # the lower corner starts `drop` above the floor

@@ -45,7 +45,24 @@ def build(
     theta0: float = 1.0,
     t_end: float = 4.0,
 ) -> Scene:
-    """Point pendulum on a rod swinging into a wall under its pivot: impacts with restitution e."""
+    """Point pendulum on a rod swinging into a wall under its pivot: impacts with restitution e.
+
+    Parameters
+    ----------
+    m : float
+        Mass of the bob (kg). Allowed: > 0.
+    L : float
+        Length of the rod (m). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−z`` (m/s²). Allowed: > 0.
+    e : float
+        Coefficient of restitution of the impacts on the wall (-). Allowed: 0 ≤ e ≤ 1.
+    theta0 : float
+        Release angle from the downward vertical, on the wall's side; the bob starts at rest (rad).
+        Allowed: 0 < theta0 < π.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
+    """
     if not (m > 0 and L > 0 and g > 0 and t_end > 0):
         raise InputError(f"bouncing-pendulum: m, L, g and t_end must be positive, got m={m}, L={L}, g={g}")
     if not 0 <= e <= 1:

@@ -112,10 +112,33 @@ def build(
 ) -> Scene:
     """Crane: a trolley force makes the payload's horizontal position follow s(t); margin ∝ sin²θ.
 
-    ``theta0`` is the initial rope angle (not 0: there the servo cannot act), the payload starts
-    at horizontal position 0 with the trolley at rest relative to it (``θ̇ = 0``, ``ẋ = ṡ(0) = 0``).
-    ``accel`` is the base acceleration of the payload (default ``−g tan theta0``, which holds the
-    rope at ``theta0``), ``distance``/``duration`` an extra smooth rest-to-rest move.
+    The payload starts at horizontal position 0 with the trolley at rest relative to it (``θ̇ = 0``,
+    ``ẋ = ṡ(0) = 0``).
+
+    Parameters
+    ----------
+    M0 : float
+        Mass of the trolley (kg). Allowed: > 0.
+    m : float
+        Mass of the payload (kg). Allowed: > 0.
+    L : float
+        Length of the rope (m). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−y`` (m/s²). Allowed: any finite number; physically > 0 (the sign
+        is not checked).
+    theta0 : float
+        Initial rope angle from the vertical; the payload starts at horizontal position 0, the trolley at rest
+        relative to it (rad). Allowed: any finite number ≠ 0: at 0 the servo cannot act (not checked here: the
+        step raises a RealizabilityError).
+    accel : float or None
+        Base acceleration of the payload's prescribed horizontal motion ``s(t)``; None: ``−g tan theta0``, which
+        holds the rope at ``theta0`` (m/s²). Allowed: any finite number, or None.
+    distance : float
+        Length of the extra smooth rest-to-rest move of the payload; 0: none (m). Allowed: any finite number.
+    duration : float
+        Duration of that move (s). Allowed: > 0.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
     """
     _check(M0, m, L, g, theta0, distance, duration, t_end)
     if accel is None:

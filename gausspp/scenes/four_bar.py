@@ -103,9 +103,38 @@ def build(
 ) -> Scene:
     """Four-bar linkage closed by a redundant third loop row (rank-deficient J): the QP's least-norm multiplier.
 
-    ``redundant=False`` gives the minimal model (the closure's x and y rows only); ``third_row``
-    is ``"oblique"`` (the closure along ``(cos alpha, sin alpha)``) or ``"distance"`` (the rocker's
-    length ``|C − P| = l3``).
+    Parameters
+    ----------
+    redundant : bool
+        Whether to add the third loop row, which the closure's x and y rows imply (rank-deficient ``J``); False:
+        the minimal model (-). Allowed: True or False.
+    third_row : str
+        The redundant row: the closure along ``(cos alpha, sin alpha)`` (``'oblique'``, dependent everywhere) or
+        the rocker's length ``|C − P| = l3`` (``'distance'``, dependent on the constraint manifold only) (-).
+        Allowed: one of 'oblique', 'distance'.
+    alpha : float
+        Direction of the oblique row from the x axis, used with ``third_row='oblique'`` (rad). Allowed: any
+        finite number.
+    l0 : float
+        Distance between the ground pivots O and P (m). Allowed: > 0; the loop must close at ``theta0``.
+    l1 : float
+        Length of the crank OB (m). Allowed: > 0; the loop must close at ``theta0``.
+    l2 : float
+        Length of the coupler BC (m). Allowed: > 0; the loop must close at ``theta0``.
+    l3 : float
+        Length of the rocker CP (m). Allowed: > 0; the loop must close at ``theta0``.
+    rho : float
+        Mass per unit length of the uniform bars (kg/m). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−y`` (m/s²). Allowed: any finite number; physically > 0 (the sign
+        is not checked).
+    theta0 : float
+        Initial angle ``θ1`` of the crank from the ground line (rad). Allowed: any finite number at which the loop
+        closes.
+    omega0 : float
+        Initial rate ``θ̇1`` of the crank (rad/s). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
     """
     _check(redundant, third_row, alpha, l0, l1, l2, l3, rho, g, theta0, omega0, t_end)
     lengths = (float(l1), float(l2), float(l3))

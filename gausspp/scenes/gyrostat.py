@@ -40,9 +40,27 @@ def build(
 ) -> Scene:
     """Gyrostat: a rotor on body axis ``n`` keeps ``(ω, l) = 0`` (flywheel realization); ``n=None`` means ``n = l``.
 
-    ``inertia`` (3 principal moments or a 3×3 tensor) includes the rotor's transverse inertia but
-    not its axial one; ``lam0`` is the rotor's initial axial angular momentum ``λ``; ``omega0``
-    is projected onto the plane ``(ω, l) = 0``. Realizable iff ``(I⁻¹n, l) ≠ 0`` (16).
+    Realizable iff ``(I⁻¹n, l) ≠ 0`` (16).
+
+    Parameters
+    ----------
+    inertia : (3,) or (3, 3) array_like
+        Inertia of the carrier with the rotor's transverse inertia but not its axial one, body axes: the principal
+        moments or the tensor (kg·m²). Allowed: symmetric positive definite, its largest principal moment at most
+        the sum of the other two.
+    n : (3,) array_like or None
+        Body axis of the rotor, normalized here; None: ``n = l``, the vakonomic motion (-). Allowed: a finite
+        nonzero 3-vector, or None; realizable only if ``(I⁻¹n, l) ≠ 0`` (not checked here: the step raises a
+        RealizabilityError).
+    l : (3,) array_like
+        Body axis of the constraint ``(ω, l) = 0``, normalized here (-). Allowed: a finite nonzero 3-vector.
+    omega0 : (3,) array_like
+        Initial angular velocity in body axes, projected onto the plane ``(ω, l) = 0`` (rad/s).
+        Allowed: a finite 3-vector.
+    lam0 : float
+        Initial axial angular momentum ``λ`` of the rotor (kg·m²/s). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
     """
     I = inertia_matrix("gyrostat", inertia)
     l_ = unit_vector("gyrostat", "l", l)

@@ -53,10 +53,28 @@ def build(
 ) -> Scene:
     """Gyrostat with the rotor angle as a coordinate, ``(ω, l) = 0`` kept by the motor torque (Béghin servo).
 
-    ``inertia`` = ``I′`` (carrier with the rotor's transverse inertia), ``rotor_inertia`` = ``J_r``
-    (axial); ``lam0 = J_r (n·ω₀ + θ̇₀)`` is the rotor's initial axial angular momentum, as in the
-    scene ``"gyrostat"`` (so ``θ̇₀ = lam0/J_r − n·ω₀``); ``omega0`` is projected onto
-    ``(ω, l) = 0``; ``n=None`` means ``n = l``.
+    Parameters
+    ----------
+    inertia : (3,) or (3, 3) array_like
+        ``I′``: inertia of the carrier with the rotor's transverse inertia, body axes: the principal moments or
+        the tensor (kg·m²). Allowed: symmetric positive definite (not checked).
+    rotor_inertia : float
+        ``J_r``: the rotor's axial moment of inertia (kg·m²). Allowed: > 0.
+    n : (3,) array_like or None
+        Body axis of the rotor, normalized here; None: ``n = l`` (-). Allowed: a finite nonzero 3-vector, or
+        None; realizable only if ``(I′⁻¹n, l) ≠ 0`` (not checked here: the step raises a RealizabilityError).
+    l : (3,) array_like
+        Body axis of the constraint ``(ω, l) = 0``, normalized here (-). Allowed: a finite nonzero 3-vector.
+    omega0 : (3,) array_like
+        Initial angular velocity of the carrier in body axes, projected onto ``(ω, l) = 0`` (rad/s).
+        Allowed: a finite 3-vector.
+    lam0 : float
+        The rotor's initial axial angular momentum ``λ = J_r (n·ω₀ + θ̇₀)``, as in the scene ``"gyrostat"``: it
+        sets the rotor's initial rate ``θ̇₀ = lam0/J_r − n·ω₀`` (kg·m²/s). Allowed: any finite number.
+    theta0 : float
+        Initial angle ``θ`` of the rotor relative to the carrier (rad). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
     """
     I = inertia_matrix("gyrostat-extended", inertia)
     Jr = float(rotor_inertia)

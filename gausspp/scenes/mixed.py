@@ -47,7 +47,38 @@ def build(
     x0: float = 1.0,
     t_end: float = 5.0,
 ) -> Scene:
-    """Particle in the plane on the track ẏ = cẋ, kept by a mixed realization (law (19) or (22))."""
+    """Particle in the plane on the track ẏ = cẋ, kept by a mixed realization (law (19) or (22)).
+
+    Parameters
+    ----------
+    law : str
+        The force multiplier: ``λ′ = λ`` (``'proportional'``, paper (19)) or ``λ′ = λ̇`` (``'rate'``, paper
+        (22)); the scenes ``mixed-proportional`` and ``mixed-rate`` fix it (-). Allowed: one of 'proportional',
+        'rate'.
+    m : float
+        Mass of the particle (kg). Allowed: > 0.
+    kx : float
+        Stiffness of the spring along x, ``V = ½ kx x²`` (N/m). Allowed: any finite number; ≥ 0 for a restoring
+        spring (the sign is not checked).
+    ky : float
+        Stiffness of the spring along y, ``V = ½ ky y²`` (N/m). Allowed: any finite number; ≥ 0 for a restoring
+        spring (the sign is not checked).
+    c : float
+        Slope of the track ``ẏ = c ẋ`` (-). Allowed: any finite number.
+    beta : float
+        Gyroscopic coefficient ``β`` of the inertial part ``N = ẏ + β (x ẏ − y ẋ)`` (1/m). Allowed: any finite
+        number; where the realizability condition of the module docstring fails the step raises a
+        RealizabilityError.
+    M : (2,) array_like
+        Direction of the controlled force, whose part of the reaction is ``λ′ M`` (1/s if λ′ = λ, - if λ′ = λ̇).
+        Allowed: a finite 2-vector.
+    lam0 : float
+        Initial value of the multiplier ``λ``, a state (kg·m/s). Allowed: any finite number.
+    x0 : float
+        Initial position x of the particle, which starts at rest at ``(x0, 0)`` (m). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
+    """
     if law not in LAWS:
         raise UnknownNameError(f"mixed: law={law!r} is unknown; use one of {list(LAWS)}")
     if not m > 0:

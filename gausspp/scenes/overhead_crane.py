@@ -100,8 +100,26 @@ def build(
 ) -> Scene:
     """Overhead crane (trolley force, winch tension) carrying its payload along a path: tangential servo, index 5.
 
-    ``m1`` trolley, ``m2`` payload, ``g`` gravity; the payload moves by ``D`` in ``T`` from ``L0`` below the rail,
-    lifted by ``h`` mid-way. ``scene.exact(t)`` and ``scene.forces(t) = (F1, F2)`` are the flat solution.
+    ``scene.exact(t)`` and ``scene.forces(t) = (F1, F2)`` are the flat solution.
+
+    Parameters
+    ----------
+    m1 : float
+        Mass of the trolley (kg). Allowed: > 0.
+    m2 : float
+        Mass of the payload (kg). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−y`` (m/s²). Allowed: > 0, and ``Ÿd + g > 0`` along the whole path (a
+        taut rope).
+    D : float
+        Horizontal distance of the payload's rest-to-rest transfer (m). Allowed: any finite number.
+    L0 : float
+        Initial and final depth of the payload below the rail: the rope's length at rest (m). Allowed: > 0.
+    h : float
+        Lift of the payload mid-way (m). Allowed: any finite number with ``Ÿd + g > 0`` along the path (a taut
+        rope); physically h < L0, the payload below the rail (not checked).
+    T : float
+        Duration of the transfer, also the scene's horizon ``t_end`` (s). Allowed: > 0.
     """
     _check(m1=m1, m2=m2, L0=L0, T=T)
     path = Path.transfer(D, L0, h, T)

@@ -165,7 +165,30 @@ def build(
     omega0: float = -1.0,
     t_end: float = 10.0,
 ) -> Scene:
-    """Parallelogram linkage in maximal coordinates: IFToMM A02, the double parallelogram (redundant), a ladder."""
+    """Parallelogram linkage in maximal coordinates: IFToMM A02, the double parallelogram (redundant), a ladder.
+
+    Parameters
+    ----------
+    cells : int
+        Number of cells chained along x; 1: A02, or the double parallelogram with ``third_bar`` (-).
+        Allowed: integer ≥ 1.
+    third_bar : bool
+        Whether each cell is a double parallelogram: a third crank and a coupler of length ``2 l``, one row
+        redundant at every state (-). Allowed: True or False.
+    l : float
+        Length of a crank, and of a coupler without ``third_bar`` (m). Allowed: > 0.
+    m : float
+        Mass of a crank: every bar has mass ``m`` per length ``l`` (kg). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−y`` (m/s²). Allowed: any finite number; physically > 0 (the sign
+        is not checked).
+    theta0 : float
+        Initial angle of the cranks from the ground line; π/2: vertical (rad). Allowed: any finite number.
+    omega0 : float
+        Initial angular velocity of the cranks (rad/s). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
+    """
     _check(cells, third_bar, l, m, g, theta0, omega0, t_end)
     w = 2 if third_bar else 1
     order = bars(cells, third_bar)

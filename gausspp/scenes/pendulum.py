@@ -40,7 +40,27 @@ def build(
     omega0: float = 0.0,
     t_end: float = 2.0,
 ) -> Scene:
-    """Planar rigid body pinned at distance L from its centre of mass by two holonomic constraints."""
+    """Planar rigid body pinned at distance L from its centre of mass by two holonomic constraints.
+
+    Parameters
+    ----------
+    m : float
+        Mass of the body (kg). Allowed: > 0.
+    Ic : float
+        Moment of inertia of the body about its centre of mass (kg·m²). Allowed: > 0.
+    L : float
+        Distance from the pin to the centre of mass (m). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−z`` (m/s²). Allowed: any finite number; physically > 0 (the sign
+        is not checked).
+    phi0 : float
+        Initial angle ``φ`` of the body: the polar angle of its centre of mass about the pin, from the x axis; 0:
+        level with the pin (rad). Allowed: any finite number.
+    omega0 : float
+        Initial angular velocity ``φ̇`` (rad/s). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation, also the span of the reference solution (s). Allowed: > 0.
+    """
     from scipy.integrate import solve_ivp
 
     if not (m > 0 and Ic > 0 and L > 0):

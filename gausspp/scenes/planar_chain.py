@@ -87,7 +87,25 @@ def straight(N: int, L: float, theta0: float) -> np.ndarray:
 def build(
     N: int = 4, m: float = 1.0, L: float = 1.0, g: float = 9.81, theta0: float = -0.3, t_end: float = 1.0
 ) -> Scene:
-    """Planar chain of N pinned links in maximal coordinates (3N coordinates, 2N rows): the scaling problem."""
+    """Planar chain of N pinned links in maximal coordinates (3N coordinates, 2N rows): the scaling problem.
+
+    Parameters
+    ----------
+    N : int
+        Number of links (-). Allowed: integer ≥ 1.
+    m : float
+        Mass of each link (kg). Allowed: > 0.
+    L : float
+        Length of each link (m). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−z`` (m/s²). Allowed: any finite number; physically > 0 (the sign
+        is not checked).
+    theta0 : float
+        Initial angle of the straight chain from the horizontal, negative below it; it starts at rest (rad).
+        Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
+    """
     if not N >= 1:
         raise InputError(f"planar-chain: N must be a positive integer, got N={N!r}; give N = 1, 2, …")
     if not (m > 0 and L > 0):
@@ -130,7 +148,27 @@ def build_planar_ladder(
     theta0: float = -1.0,
     t_end: float = 1.0,
 ) -> Scene:
-    """Ladder of N parallelogram four-bars in maximal coordinates (closed loops: 9N coordinates, 8N rows)."""
+    """Ladder of N parallelogram four-bars in maximal coordinates (closed loops: 9N coordinates, 8N rows).
+
+    Parameters
+    ----------
+    N : int
+        Number of levels, one parallelogram four-bar each (-). Allowed: integer ≥ 1.
+    m : float
+        Mass of each bar, rails and rungs alike (kg). Allowed: > 0.
+    L : float
+        Length of each rail bar (m). Allowed: > 0.
+    W : float
+        Length of each rung, the ladder's width (m). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−z`` (m/s²). Allowed: any finite number; physically > 0 (the sign
+        is not checked).
+    theta0 : float
+        Initial angle of the rails from the horizontal; the ladder starts at rest (rad). Allowed: |sin theta0| >
+        0.1 (rails not nearly level with the rungs).
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
+    """
     if not N >= 1:
         raise InputError(f"planar-ladder: N must be a positive integer, got N={N!r}; give N = 1, 2, …")
     if not (m > 0 and L > 0 and W > 0):

@@ -30,8 +30,22 @@ def build(
 ) -> Scene:
     """Rigid body with a servo torque along ``n`` keeping ``(ω, l) = 0``; ``n=None`` means ``n = l`` (Suslov).
 
-    ``inertia`` is a 3-vector of principal moments or a 3×3 tensor; ``omega0`` is projected onto
-    the plane ``(ω, l) = 0`` so that the initial data lie on the constraint.
+    Parameters
+    ----------
+    inertia : (3,) or (3, 3) array_like
+        Inertia about the fixed point in body axes: the principal moments or the tensor (kg·m²).
+        Allowed: symmetric positive definite, its largest principal moment at most the sum of the other two.
+    l : (3,) array_like
+        Body axis of the constraint ``(ω, l) = 0``, normalized here (-). Allowed: a finite nonzero 3-vector.
+    n : (3,) array_like or None
+        Body axis of the servo torque ``λ n``, normalized here; None: ``n = l``, Suslov's problem (-).
+        Allowed: a finite nonzero 3-vector, or None; realizable only if ``(I⁻¹n, l) ≠ 0`` (not checked here: the
+        step raises a RealizabilityError).
+    omega0 : (3,) array_like
+        Initial angular velocity in body axes, projected onto the plane ``(ω, l) = 0`` so that the initial data
+        lie on the constraint (rad/s). Allowed: a finite 3-vector.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
     """
     I = inertia_matrix("rigid-body-servo", inertia)
     l_ = unit_vector("rigid-body-servo", "l", l)

@@ -53,10 +53,38 @@ def build(
 ) -> Scene:
     """Crane with a bounded trolley motor |λ| ≤ F_max: the servo saturates and only tracks the payload's path.
 
-    ``F_max`` is the motor's bound (``inf`` allowed: then it never saturates, but the step is still
-    the general Gauss QP); ``tau`` the time constant of the critically damped Baumgarte feedback
-    that brings the payload back to its path (``params["stabilize"]``). The other parameters are
-    the ``crane`` scene's.
+    The parameters after ``tau`` are the ``crane`` scene's.
+
+    Parameters
+    ----------
+    F_max : float
+        Bound of the trolley motor, ``|λ| ≤ F_max`` (N). Allowed: > 0; inf: it never saturates, but the step is
+        still the general Gauss QP.
+    tau : float
+        Time constant of the critically damped Baumgarte feedback that brings the payload back to its path,
+        ``params["stabilize"]`` (s). Allowed: > 0.
+    M0 : float
+        Mass of the trolley (kg). Allowed: > 0.
+    m : float
+        Mass of the payload (kg). Allowed: > 0.
+    L : float
+        Length of the rope (m). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−y`` (m/s²). Allowed: any finite number; physically > 0 (the sign
+        is not checked).
+    theta0 : float
+        Initial rope angle from the vertical; the payload starts at horizontal position 0, the trolley at rest
+        relative to it (rad). Allowed: any finite number ≠ 0: at 0 the servo cannot act (not checked here: the
+        step raises a RealizabilityError).
+    accel : float or None
+        Base acceleration of the payload's prescribed horizontal motion ``s(t)``; None: ``−g tan theta0``, which
+        holds the rope at ``theta0`` (m/s²). Allowed: any finite number, or None.
+    distance : float
+        Length of the extra smooth rest-to-rest move of the payload; 0: none (m). Allowed: any finite number.
+    duration : float
+        Duration of that move (s). Allowed: > 0.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
     """
     if not (isinstance(F_max, (int, float, np.floating, np.integer)) and F_max > 0):
         raise InputError(f"saturated-crane: F_max must be a positive number (the motor's bound), got {F_max!r}")

@@ -67,10 +67,27 @@ def build(
 ) -> Scene:
     """Skate (knife edge) in the plane, no sideways velocity; nonholonomic (ideal) or vakonomic law.
 
-    ``v0`` is the initial speed along the blade, ``omega0`` the initial turning rate ``θ̇``,
-    ``theta0`` the initial heading (the skate starts at the origin); ``lam0`` is the vakonomic
-    multiplier's initial value (ignored by the nonholonomic law; nonzero by default so that the
-    two laws differ).
+    Parameters
+    ----------
+    m : float
+        Mass of the skate (kg). Allowed: > 0.
+    J : float
+        Moment of inertia about the vertical axis through the contact point (kg·m²). Allowed: > 0.
+    realization : str
+        The law of motion: the ideal (d'Alembert–Lagrange) constraint (``'nonholonomic'``) or the vakonomic one
+        (``'vakonomic'``) (-). Allowed: one of 'nonholonomic', 'vakonomic'.
+    v0 : float
+        Initial speed along the blade (m/s). Allowed: any finite number.
+    omega0 : float
+        Initial turning rate ``θ̇`` (rad/s). Allowed: any finite number.
+    theta0 : float
+        Initial heading of the blade from the x axis; the skate starts at the origin (rad). Allowed: any finite
+        number.
+    lam0 : float
+        Initial value of the vakonomic multiplier ``λ``, a momentum; ignored by the nonholonomic law, nonzero by
+        default so that the two laws differ (kg·m/s). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
     """
     if realization not in REALIZATIONS:
         raise UnknownNameError(f"skate: realization={realization!r} is unknown; use one of {list(REALIZATIONS)}")

@@ -179,7 +179,26 @@ def build(
     omega0: float = -1.0,
     t_end: float = 10.0,
 ) -> Scene:
-    """Spatial double parallelogram, revolute joints, in maximal coordinates: overconstrained like Bricard's."""
+    """Spatial double parallelogram, revolute joints, in maximal coordinates: overconstrained like Bricard's.
+
+    Parameters
+    ----------
+    cells : int
+        Number of double parallelogram cells chained along x (-). Allowed: integer ≥ 1.
+    l : float
+        Length of a crank; the couplers are ``2 l`` long (m). Allowed: > 0.
+    m : float
+        Mass of a crank: every bar has mass ``m`` per length ``l`` (kg). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−y`` (m/s²). Allowed: any finite number; physically > 0 (the sign
+        is not checked).
+    theta0 : float
+        Initial yaw ``ψ`` of the cranks from the ground line; π/2: vertical (rad). Allowed: any finite number.
+    omega0 : float
+        Initial yaw rate ``ψ̇`` of the cranks (rad/s). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
+    """
     try:
         planar._check(cells, True, l, m, g, theta0, omega0, t_end)
     except InputError as exc:

@@ -57,8 +57,20 @@ def flat_chain(yd: Polynomial, n: int, m: float, k: float) -> tuple[list[Polynom
 def build(n: int = 3, m: float = 1.0, k: float = 4.0, T: float = 4.0, distance: float = 1.0) -> Scene:
     """Spring chain of n masses, force on the first, the last's position prescribed: tangential servo, index 2n+1.
 
-    ``n`` masses ``m`` (1 … 6) joined by springs ``k``; the last moves by ``distance`` in ``T`` from rest to
-    rest. ``scene.exact(t)`` and ``scene.forces(t) = (u,)`` are the flat solution.
+    ``scene.exact(t)`` and ``scene.forces(t) = (u,)`` are the flat solution.
+
+    Parameters
+    ----------
+    n : int
+        Number of masses (-). Allowed: integer, 1 ≤ n ≤ 6.
+    m : float
+        Mass of each body (kg). Allowed: > 0.
+    k : float
+        Stiffness of the springs between neighbours (N/m). Allowed: > 0.
+    T : float
+        Duration of the last mass's rest-to-rest move, also the scene's horizon ``t_end`` (s). Allowed: > 0.
+    distance : float
+        Displacement of the last mass over the move (m). Allowed: any finite number.
     """
     if not 1 <= n <= MAX_MASSES:
         raise InputError(f"spring-chain-servo: n must be between 1 and {MAX_MASSES} (masses), got {n!r}")

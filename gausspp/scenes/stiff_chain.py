@@ -55,7 +55,29 @@ def build(
     amplitude: float = 0.5,
     t_end: float = 10.0,
 ) -> Scene:
-    """Chain of masses on soft and stiff springs (stiffness ratio 1e6 by default), lever constraint (ideal or servo)."""
+    """Chain of masses on soft and stiff springs (stiffness ratio 1e6 by default), lever constraint (ideal or servo).
+
+    Parameters
+    ----------
+    n : int
+        Number of masses (-). Allowed: integer ≥ 3.
+    stiffness_ratio : float
+        Stiffness of the stiff springs over ``k`` (-). Allowed: > 0.
+    mass_ratio : float
+        Last mass over the first: the masses grow geometrically from 1 kg to ``mass_ratio`` kg (-). Allowed: > 0.
+    stiff : sequence of int
+        Indices of the stiff springs: spring 0 joins mass 0 to the wall, spring ``i`` masses ``i − 1`` and ``i``
+        (-). Allowed: integers from 0 to n − 1 (repeats ignored; empty: no stiff spring).
+    realization : str
+        How the lever ``v[n−1] + v[n−2] = 0`` is kept: by a lever with a fixed pivot (``'ideal'``) or by a
+        follower force on the last mass (``'servo'``) (-). Allowed: one of 'ideal', 'servo'.
+    k : float
+        Stiffness of the soft springs (N/m). Allowed: > 0.
+    amplitude : float
+        Initial displacements ``∓amplitude`` of the last two masses (m). Allowed: any finite number.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
+    """
     stiff = _checked(n, stiffness_ratio, mass_ratio, stiff, realization, k)
     n = int(n)
     masses = float(mass_ratio) ** (np.arange(n) / (n - 1))

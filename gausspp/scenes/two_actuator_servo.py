@@ -96,9 +96,35 @@ def build(
 ) -> Scene:
     """Two rotors keep one altitude constraint: the least-compulsion split is the torque-free lever rule.
 
-    ``f_max`` (optional, a number or one per rotor) bounds the thrusts to ``[0, f_max]``: a rotor
-    at its bound hands the rest to the other (reallocation), the altitude is kept while the pair
-    can supply the thrust.
+    A rotor at its bound ``f_max`` hands the rest to the other (reallocation): the altitude is kept while the
+    pair can supply the thrust.
+
+    Parameters
+    ----------
+    m : float
+        Mass of the body (kg). Allowed: > 0.
+    I : float
+        Moment of inertia of the body about its centre of mass (kg·m²). Allowed: > 0.
+    d1 : float
+        Arm of the left rotor from the centre of mass (m). Allowed: > 0.
+    d2 : float
+        Arm of the right rotor from the centre of mass (m). Allowed: > 0.
+    g : float
+        Gravitational acceleration, along ``−y`` (m/s²). Allowed: any finite number; physically > 0 (the sign
+        is not checked).
+    theta0 : float
+        Initial tilt of the body, which the torque-free thrust split keeps while no rotor is at its bound; the
+        body starts at rest at the origin (rad).
+        Allowed: |theta0| < π/2 (the rotors push upwards).
+    climb : float
+        Altitude gained by the smooth rest-to-rest climb ``h(t)`` (m). Allowed: any finite number.
+    duration : float
+        Duration of the climb (s). Allowed: > 0.
+    f_max : float, pair or None
+        Bound on the thrusts, ``0 ≤ fᵢ ≤ f_max``: one number for both rotors or one per rotor; None: unbounded
+        (N). Allowed: > 0 each (inf allowed), or None.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
     """
     m, I, d1, d2, duration, t_end = (
         _positive(n, x)

@@ -35,7 +35,27 @@ def build(
     k: float = 0.0,
     t_end: float = 1.0,
 ) -> Scene:
-    """Two masses joined by a rod (ideal) or kept together by a follower force on ``m1`` (servo)."""
+    """Two masses joined by a rod (ideal) or kept together by a follower force on ``m1`` (servo).
+
+    Parameters
+    ----------
+    m1 : float
+        Mass of the first body, the one the servo's follower force pushes (kg). Allowed: > 0.
+    m2 : float
+        Mass of the second body, the one ``F`` and the spring act on (kg). Allowed: > 0.
+    F : float
+        Constant force on the second mass, along the line (N). Allowed: any finite number.
+    realization : str
+        How ``ẋ₂ − ẋ₁ = 0`` is kept: by a rigid rod (``'ideal'``) or by a follower force on ``m1``
+        (``'servo'``) (-). Allowed: one of 'ideal', 'servo'.
+    v : float
+        Initial velocity of both masses (m/s). Allowed: any finite number.
+    k : float
+        Stiffness of the spring from the second mass to the wall, force ``−k x₂`` (N/m). Allowed: ≥ 0 (0: no
+        spring).
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
+    """
     if realization not in REALIZATIONS:
         raise UnknownNameError(f"two-masses: realization={realization!r} is unknown; use one of {list(REALIZATIONS)}")
     if not (m1 > 0 and m2 > 0 and k >= 0):

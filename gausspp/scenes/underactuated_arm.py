@@ -63,9 +63,16 @@ def arm_model(mech: Any, d: Any = (0.05, 0.04), q0: Any = Q0) -> Model:
 def build(d: Any = (0.05, 0.04), t_end: float = 0.5) -> Scene:
     """Three-link planar arm, passive elbow: the tip's x, y follow a path by shoulder and wrist (direct route).
 
-    ``d`` (2 numbers, m): the tip moves to ``p₀ + 2d`` and back in π s; ``t_end`` the horizon (the margin stays
-    above 0.3 on the default 0.5 s; near 0.87 s the arm meets a singular ``J A⁻¹ Mᵀ``). Needs
-    ``pip install 'gausspp[robots]'``.
+    Needs ``pip install 'gausspp[robots]'``.
+
+    Parameters
+    ----------
+    d : (2,) array_like
+        Amplitude of the tip's path ``p₀ + (1 − cos 2t) d`` in x and y: the tip moves to ``p₀ + 2d`` and back in
+        π s (m). Allowed: 2 finite numbers.
+    t_end : float
+        Suggested horizon of a simulation: the margin stays above 0.3 on the default 0.5 s, near 0.87 s the arm
+        meets a singular ``J A⁻¹ Mᵀ`` (s). Allowed: > 0.
     """
     offset = path_offset("underactuated-arm", d, 2)
     t_end = positive("t_end", t_end)

@@ -76,8 +76,15 @@ def path_offset(scene: str, d: Any, n: int) -> np.ndarray:
 def build(d: Any = (0.08, 0.05, -0.04), t_end: float = 1.2) -> Scene:
     """UR5 (example-robot-data): the tool follows a path by its 6 joint torques, redundant (QP, least compulsion).
 
-    ``d`` (3 numbers, m): the tool moves to ``p₀ + 2d`` and back in π s; ``t_end`` the horizon. Needs
-    ``pip install 'gausspp[robots]' example-robot-data``; step and simulate it with ``solver="qp"``.
+    Needs ``pip install 'gausspp[robots]' example-robot-data``; step and simulate it with ``solver="qp"``.
+
+    Parameters
+    ----------
+    d : (3,) array_like
+        Amplitude of the tool's path ``p₀ + (1 − cos 2t) d``: the tool moves to ``p₀ + 2d`` and back in π s (m).
+        Allowed: 3 finite numbers.
+    t_end : float
+        Suggested horizon of a simulation (s). Allowed: > 0.
     """
     offset = path_offset("ur5-tool-path", d, 3)
     t_end = positive("t_end", t_end)
