@@ -36,7 +36,9 @@ extensions = [
     "sphinx_gallery.gen_gallery",
 ]
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "Thumbs.db", ".DS_Store", "auto_examples/*.ipynb", "auto_examples/*.py"]
+exclude_patterns = [
+    "_build", "Thumbs.db", ".DS_Store", "auto_examples/*.ipynb", "auto_examples/*.py", "browser_check"
+]  # fmt: skip
 templates_path = ["_templates"]
 # the gallery passes a function (reset_argv) in its configuration: the environment cache skips it
 suppress_warnings = ["config.cache"]
@@ -44,6 +46,8 @@ suppress_warnings = ["config.cache"]
 html_theme = "pydata_sphinx_theme"
 html_title = "gausspp"
 html_theme_options = {"navigation_with_keys": False, "show_prev_next": True}
+# the theme's light/dark switch starts from a mode it knows (a first visit otherwise logs "invalid theme mode")
+html_context = {"default_mode": "light"}
 
 myst_heading_anchors = 3
 myst_enable_extensions = ["dollarmath", "amsmath"]
@@ -57,7 +61,7 @@ napoleon_numpy_docstring = True
 napoleon_google_docstring = False
 
 # The examples the test build (tests/test_docs_site.py) shows without running; `make docs` runs them all.
-# Measured in the full build on a shared 2-core machine (docs/auto_examples/sg_execution_times.rst): this one
+# Measured in the full build on a shared 2-core machine (each example page's "Total running time"): this one
 # takes 26 s, every other example 1.4-5 s.
 SLOW_EXAMPLES = [
     "error_vs_runtime.py",  # a work-precision sweep: four integrators x two step solvers, repeated
@@ -111,6 +115,9 @@ sphinx_gallery_conf = {
     "abort_on_example_error": False,
     "only_warn_on_example_error": False,
     "min_reported_time": 1,
+    # no "Computation times" pages: they load jQuery and DataTables from CDNs, which an offline site cannot reach
+    # (the browser check of `make docs` reports them); each example's page still says its running time
+    "write_computation_times": False,
     "within_subsection_order": "FileNameSortKey",
 }
 

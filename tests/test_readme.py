@@ -1,7 +1,7 @@
 """Every claim of the README and of docs/ is checked.
 
-* Each ```python block of ``README.md``, ``docs/guide.md`` and ``docs/index.md`` (the site's front page) runs on its own, in a fresh
-  interpreter, in a temporary directory, with a non-interactive matplotlib backend. Its expected
+* Each ```python block of ``README.md``, ``docs/guide.md`` and ``docs/index.md`` (the site's front page) runs
+  on its own, in a fresh interpreter, in a temporary directory, with a non-interactive matplotlib backend. Its expected
   output is written as comment lines ``# → ...`` after the code: the run must print exactly those
   lines up to the numbers, and each claimed number must be the printed one rounded to the digits
   shown (``≤ x`` claims a bound). Blocks with a known closed form are checked against it too.
