@@ -38,6 +38,7 @@ from .model.mechanism import Lagrangian, MassMatrix, Mechanism, RigidBody
 from .model.model import Model
 from .model.realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
 from .model.urdf import frame_acceleration_bias, frame_jacobian, frame_position, frame_rotation, from_urdf
+from .multibody import Multibody
 from .servo import ServoDiagnosis, ServoTrajectory, replay, servo_diagnosis, simulate_servo
 from .simulation import methods
 from .simulation.drift import Baumgarte
@@ -84,6 +85,7 @@ __all__ = [
     "MissingMultiplierError",
     "Mixed",
     "Model",
+    "Multibody",
     "NonFiniteError",
     "NotAffineError",
     "NotPositiveDefiniteError",
