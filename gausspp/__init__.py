@@ -39,6 +39,7 @@ from .model.model import Model
 from .model.realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
 from .model.urdf import frame_acceleration_bias, frame_jacobian, frame_position, frame_rotation, from_urdf
 from .multibody import Multibody
+from .multibody.mjcf import MJCFMachine, from_mjcf
 from .servo import ServoDiagnosis, ServoTrajectory, replay, servo_diagnosis, simulate_servo
 from .simulation import methods
 from .simulation.drift import Baumgarte
@@ -68,6 +69,7 @@ __all__ = [
     "Constraint",
     "CrossCheck",
     "Force",
+    "from_mjcf",
     "from_sympy",
     "GaussppError",
     "GaussppWarning",
@@ -83,6 +85,7 @@ __all__ = [
     "MassMatrix",
     "Mechanism",
     "MissingMultiplierError",
+    "MJCFMachine",
     "Mixed",
     "Model",
     "Multibody",

@@ -118,8 +118,7 @@ class Bodies(Mechanism):
             row = ca.jacobian(p, q) @ self.qdot + ca.jacobian(p, t)
             grad = ca.jacobian(N[i], q).T
             for b in self.bodies:
-                lin = 3 if not b.planar else 3  # the coordinates whose rates are velocities
-                for k in range(lin):
+                for k in range(3):  # the coordinates whose rates are velocities: (x, y, θ) or (x, y, z)
                     row[b.v_start + k] -= grad[b.q_start + k]
                 if not b.planar:
                     j = b.v_start + 3

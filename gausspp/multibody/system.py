@@ -333,7 +333,7 @@ class Multibody:
         q_now = mech.normalize_array(q_now)
         v_now = np.zeros(len(vnames))
         rate_keys = {k: v for k, v in (rates or {}).items()}
-        by_rate = _indices(rate_keys, [*vnames], "rates", aliases=dict(zip(names, vnames, strict=False)))
+        by_rate = _indices(rate_keys, [*vnames], "rates", aliases=self._rate_aliases())
         for i, value in zip(by_rate, rate_keys.values(), strict=True):
             v_now[i] = float(value)
         others = [i for i in range(len(vnames)) if i not in by_rate]
@@ -349,6 +349,14 @@ class Multibody:
                     f"{self._row_names()[worst]!r} moves at {miss[worst]:.3g}; hold fewer rates"
                 )
         return q_now, v_now
+
+    def _rate_aliases(self) -> dict[str, str]:
+        """A coordinate's name for its velocity where the velocity is its rate: a planar body's three, a spatial
+        body's centre (its quaternion has none: give ``ωx`` …)."""
+        out: dict[str, str] = {}
+        for b in self._bodies.values():
+            out.update(zip(b.coordinate_names()[:3], b.velocity_names()[:3], strict=True))  # (x, y, θ) or (x, y, z)
+        return out
 
     def _row_names(self) -> list[str]:
         return [r[0] for r in self._rows] + [c.name or "motor" for c in self._extra]
