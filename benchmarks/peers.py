@@ -268,7 +268,7 @@ def print_ratios(rows: list[Row]) -> None:
         ("gp.simulate rk4 direct / MuJoCo RK4 (stiffest) wall", "gausspp simulate rk4 direct", mj, 0.5),
         ("gp.simulate rk4 qp     / MuJoCo RK4 (stiffest) wall", "gausspp simulate rk4 qp", mj, 1.0),
         ("gp.simulate default (no dt) / MuJoCo RK4 (stiffest) wall", "gausspp simulate default (no dt)", mj, 0.2),
-        ("gp.simulate default, direct / MuJoCo RK4 (stiffest) wall", "gausspp simulate default, direct (no dt)", mj, 0.2),
+        ("gp.simulate default, direct / MuJoCo RK4 wall", "gausspp simulate default, direct (no dt)", mj, 0.2),
         ("model.step direct / one Pinocchio constraintDynamics", "gausspp model.step direct (one call)", pc, 3.0),
         ("model.step qp     / one Pinocchio constraintDynamics", "gausspp model.step qp (one call)", pc, 3.0),
     ):
