@@ -11,9 +11,12 @@ angle and rate).
   the others; gausspp steps over those instants on the parallelogram's branch.
 * The **slider-crank**: a crank, a connecting rod, a slider on a guide (a prismatic joint).
 * The **spatial double parallelogram**: four spatial bars, six hinges — 30 rows of which only 23 are independent
-  (Grübler counts −6 degrees of freedom; it moves with one), as Bricard's mechanism.
+  (Grübler counts −6 degrees of freedom; it moves with one).
+* **Bricard's mechanism** (IFToMM A04): five rods along the edges of a cube and six hinges — Grübler counts no
+  freedom, the hinges' special directions leave one; released from rest, it falls through it.
 
-Each is checked against a one-degree-of-freedom model of the same machine. The figure: the three machines' energy
+The first three are checked against a one-degree-of-freedom model of the same machine (the tests); Bricard's
+against MuJoCo's simulation of the same machine in joint coordinates. The figure: the three machines' energy
 (constant: no friction) and the crank angle of the four-bar beside its reference.
 Run: python examples/bodies_and_joints.py [output.png [animation.gif]]
 """
@@ -78,6 +81,40 @@ def spatial_double_parallelogram(l: float = 1.0, m: float = 1.0) -> gp.Multibody
     return mb
 
 
+#: Bricard's mechanism (IFToMM A04): the loop's corners (m) and the hinge axis at each (space axes).
+BRICARD_CORNERS = np.array([[0, 0, 0], [1, 0, 0], [1, -1, 0], [1, -1, 1], [0, -1, 1], [0, 0, 1]], float)
+BRICARD_AXES = np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 0]], float)
+
+
+def bricard(masses: tuple = (1.0,) * 5) -> gp.Multibody:
+    """Five rods of 1 m and 1 kg (square section 0.1 m) around the edges of a unit cube, joined to each other and to
+    the ground by six hinges: 30 rows of rank 29, one degree of freedom where Grübler counts none. Gravity −y."""
+    mb = gp.Multibody(gravity=(0.0, -G, 0.0))
+    side = (0.1**2 + 0.1**2) / 12, (1.0 + 0.1**2) / 12  # per kg: about the rod's axis, across it
+    frames = []
+    for i, (a, b) in enumerate(zip(BRICARD_CORNERS[:-1], BRICARD_CORNERS[1:], strict=True)):
+        ex = b - a  # body x along the rod; z across it, normal to the first hinge's axis
+        ez = np.cross(ex, BRICARD_AXES[i] if abs(BRICARD_AXES[i] @ ex) < 0.5 else [0, 0, 1.0])
+        R = np.column_stack([ex, np.cross(ez, ex) / np.linalg.norm(ez), ez / np.linalg.norm(ez)])
+        frames.append(R)
+        inertia = masses[i] * np.array([side[0], side[1], side[1]])
+        mb.body(f"link{i + 1}", mass=masses[i], inertia=inertia, at=(a + b) / 2, orientation=quaternion(R))
+    mb.revolute("P0", "link1", (-0.5, 0, 0), None, BRICARD_CORNERS[0], axis=frames[0].T @ BRICARD_AXES[0])
+    for i in range(1, 5):
+        axis = frames[i - 1].T @ BRICARD_AXES[i]
+        mb.revolute(f"P{i}", f"link{i}", (0.5, 0, 0), f"link{i + 1}", (-0.5, 0, 0), axis=axis)
+    mb.revolute("P5", "link5", (0.5, 0, 0), None, BRICARD_CORNERS[5], axis=frames[4].T @ BRICARD_AXES[5])
+    return mb
+
+
+def quaternion(R: np.ndarray) -> tuple[float, float, float, float]:
+    """The unit quaternion ``(w, x, y, z)`` of a rotation matrix (scipy's, reordered)."""
+    from scipy.spatial.transform import Rotation
+
+    x, y, z, w = Rotation.from_matrix(R).as_quat()
+    return float(w), float(x), float(y), float(z)
+
+
 def slider_crank_reference(
     t: np.ndarray, r: float = 0.5, L: float = 1.2, rate: float = 2.0, masses: tuple = (1.0, 2.0, 0.5)
 ) -> np.ndarray:
@@ -126,6 +163,11 @@ def main() -> None:
     centre = 0.5 * np.column_stack([np.cos(theta), np.sin(theta)])
     print(f"spatial double parallelogram: {model.k} rows on {model.nv} velocities, crank centre "
           f"{np.abs(loop.q[:, :2] - centre).max():.1e} m from the one-DOF model")  # fmt: skip
+    br = bricard()
+    model = br.model()
+    q0, v0 = br.assemble()
+    runs["Bricard"] = cube = gp.simulate(model, q0, v0, 5.0, record=np.linspace(0, 5, 201))
+    print(f"Bricard: {model.k} rows on {model.nv} velocities; link 1 swings {np.ptp(cube.q[:, 2]):.2f} m in z")
     for name, run in runs.items():
         print(f"  {name}: energy constant to {np.ptp(run.energy) / np.abs(run.energy).max():.1e} (relative)")
     if len(sys.argv) > 1:
