@@ -256,6 +256,31 @@ class Multibody:
             Holonomic(lambda q, t: J.angle(B_, q) - J.angle(A_, q) - law(t), name=f"motor {name}", realization=kept)
         )
 
+    def spin(
+        self, name: str, body: str, axis: Any, law: Callable[[Any], Any], realization: Realization | str | None = None
+    ) -> None:
+        """Keep a spatial body's angular velocity about ``axis`` (its body axes) at ``law(t)``: ``(ω, e) = Ω(t)`` — a
+        servo-constraint on the velocities kept by a torque about that axis (``gp.Force`` along it, Béghin's
+        realization) unless ``realization`` says otherwise; the flyball governor's prescribed spin."""
+        self._spatial_only("spin")
+        B_ = self._body(body, name)
+        assert B_ is not None
+        e = J.unit(f"spin {name!r}", axis, 3)
+
+        def along(q: Any, v: Any, t: Any) -> Any:  # the torque's direction: about e on the body
+            d = np.zeros(v.numel())
+            d[B_.v_start + 3 : B_.v_start + 6] = e
+            return ca.DM(d)
+
+        kept = Force(M=along) if realization is None else realization
+        self._extra.append(
+            Constraint(
+                lambda q, v, t: ca.dot(v[B_.v_start + 3 : B_.v_start + 6], ca.DM(e)) - law(t),
+                name=f"spin {name}",
+                realization=kept,
+            )
+        )
+
     def _spatial_only(self, kind: str) -> None:
         if self.planar:
             raise InputError(f"Multibody.{kind}: a {kind} joint needs a spatial machine (gravity of three numbers)")
@@ -272,7 +297,7 @@ class Multibody:
 
     @property
     def constraints(self) -> list[Constraint]:
-        """One :class:`gausspp.Holonomic` per joint row, then the motors."""
+        """One :class:`gausspp.Holonomic` per joint row, then the motors and spins."""
         return [Holonomic(fn, name=name, realization=real) for name, fn, real in self._rows] + list(self._extra)
 
     def model(self, **options: Any) -> Model:
@@ -313,7 +338,7 @@ class Multibody:
         for i, value in zip(held, (fix or {}).values(), strict=True):
             q_now[i] = float(value)
         free = [i for i in range(len(names)) if i not in held]
-        g_fn, G_fn, Jv_fn, gt_fn = self._functions()
+        g_fn, G_fn, Jv_fn, phi0_fn = self._functions()
         scale = 1.0 + float(np.max(np.abs(q_now)))
         for _ in range(ASSEMBLY_ITERATIONS):
             q_now = mech.normalize_array(q_now)
@@ -327,7 +352,7 @@ class Multibody:
             worst = int(np.argmax(np.abs(g)))
             raise InitialDataError(
                 f"Multibody.assemble: the joints cannot be met with {sorted(fix or {})} held — row "
-                f"{self._row_names()[worst]!r} is still {g[worst]:.3g} after {ASSEMBLY_ITERATIONS} iterations; "
+                f"{self._row_names(positions=True)[worst]!r} is still {g[worst]:.3g} after {ASSEMBLY_ITERATIONS} iterations; "
                 "change the held values or the bodies' guesses (at=, angle=)"
             )
         q_now = mech.normalize_array(q_now)
@@ -337,7 +362,7 @@ class Multibody:
         for i, value in zip(by_rate, rate_keys.values(), strict=True):
             v_now[i] = float(value)
         others = [i for i in range(len(vnames)) if i not in by_rate]
-        Jv, gt = np.array(Jv_fn(q_now, t)), np.array(gt_fn(q_now, t)).ravel()
+        Jv, gt = np.array(Jv_fn(q_now, t)), np.array(phi0_fn(q_now, t)).ravel()
         if Jv.size:
             rhs = -gt - Jv[:, by_rate] @ v_now[by_rate]
             v_now[others] = np.linalg.lstsq(Jv[:, others], rhs, rcond=None)[0]
@@ -358,18 +383,23 @@ class Multibody:
             out.update(zip(b.coordinate_names()[:3], b.velocity_names()[:3], strict=True))  # (x, y, θ) or (x, y, z)
         return out
 
-    def _row_names(self) -> list[str]:
-        return [r[0] for r in self._rows] + [c.name or "motor" for c in self._extra]
+    def _row_names(self, positions: bool = False) -> list[str]:
+        """Every row's name in the constraints' order (``positions``: the position rows' only)."""
+        return [str(c.name) for c in self.constraints if not positions or isinstance(c, Holonomic)]
 
     def _functions(self) -> tuple[ca.Function, ca.Function, ca.Function, ca.Function]:
-        """``g(q, t)``, ``∂g/∂q``, ``J = ∂g/∂q K`` (rows' rates per velocity) and ``∂g/∂t``."""
+        """``g(q, t)`` and ``∂g/∂q`` of the position rows; ``∂Φ/∂v`` and ``Φ(q, 0, t)`` of every row (``Φ`` affine in
+        the velocities: a joint row's ``ġ``, a spin's ``(ω, e) − Ω``)."""
         mech = self.mechanism
-        q, t = mech.q, mech.t
-        g = ca.vertcat(*[ca.SX(c.value(q, t)) for c in self.constraints]) if self.constraints else ca.SX(0, 1)
-        G = ca.jacobian(g, q)
-        Jv = ca.jacobian(G @ mech.qdot, mech.v)
-        gt = ca.jacobian(g, t)
-        return tuple(ca.Function(n, [q, t], [x]) for n, x in (("g", g), ("G", G), ("Jv", Jv), ("gt", gt)))  # type: ignore[return-value]
+        q, v, t = mech.q, mech.v, mech.t
+        held = [c for c in self.constraints if isinstance(c, Holonomic)]
+        g = ca.vertcat(*[ca.SX(c.value(q, t)) for c in held]) if held else ca.SX(0, 1)
+        Phi = ca.vertcat(*[c.expressions(mech).Phi for c in self.constraints]) if self.constraints else ca.SX(0, 1)
+        Jv = ca.jacobian(Phi, v)
+        phi0 = ca.substitute(Phi, v, ca.SX.zeros(v.numel()))
+        return tuple(  # type: ignore[return-value]
+            ca.Function(n, [q, t], [x]) for n, x in (("g", g), ("G", ca.jacobian(g, q)), ("Jv", Jv), ("phi0", phi0))
+        )
 
     # -- drawing ------------------------------------------------------------------------------------------
     def drawing(self, q: np.ndarray) -> dict[str, Any]:
