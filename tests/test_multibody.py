@@ -249,3 +249,16 @@ def test_bricards_mechanism_moves_as_mujoco_moves_it() -> None:
     assert np.abs(ours - ours[0]).max() > 1.0  # it moves
     assert np.abs(ours - reference).max() <= 1e-7
     assert np.abs(run(example.bricard(masses=(1.0, 1.0, 1.01, 1.0, 1.0))) - reference).max() > 1e2 * 1e-7
+
+
+def test_a_prescribed_spin_is_kept_by_a_torque_about_its_axis() -> None:
+    """A rod on a vertical hinge spun up by ``Multibody.spin`` at ω = 2t about its hinge axis: the rate follows the
+    law, and the torque is the one of the closed form ``I_z ω̇ = 2 I_z`` (``I_z`` about the hinge: m L²/3)."""
+    mb = gp.Multibody(gravity=(0.0, 0.0, -G))
+    mb.body("rod", mass=1.0, inertia=(1e-4, 1.0 / 12, 1.0 / 12), at=(0.5, 0.0, 0.0))
+    mb.revolute("hinge", "rod", (-0.5, 0.0, 0.0), None, (0.0, 0.0, 0.0), axis=(0.0, 0.0, 1.0))
+    mb.spin("drive", "rod", (0.0, 0.0, 1.0), lambda t: 2.0 * t)
+    q0, v0 = mb.assemble()
+    traj = gp.simulate(mb.model(), q0, v0, 1.0, record=np.linspace(0.0, 1.0, 11))
+    assert np.abs(traj.v[:, 5] - 2.0 * traj.t).max() <= 1e-8
+    assert np.abs(traj.u[:, -1] - 2.0 / 3.0).max() <= 1e-8
