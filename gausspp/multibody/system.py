@@ -352,7 +352,8 @@ class Multibody:
             worst = int(np.argmax(np.abs(g)))
             raise InitialDataError(
                 f"Multibody.assemble: the joints cannot be met with {sorted(fix or {})} held — row "
-                f"{self._row_names(positions=True)[worst]!r} is still {g[worst]:.3g} after {ASSEMBLY_ITERATIONS} iterations; "
+                f"{self._row_names(positions=True)[worst]!r} is still {g[worst]:.3g} after {ASSEMBLY_ITERATIONS} "
+                "iterations; "
                 "change the held values or the bodies' guesses (at=, angle=)"
             )
         q_now = mech.normalize_array(q_now)
