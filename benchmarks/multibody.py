@@ -5,8 +5,9 @@
 For the parallelogram four-bar (IFToMM A02) and the spatial double parallelogram (an overconstrained spatial loop
 the size of Bricard's: 30 rows, rank 23), both as ``gp.Multibody`` (examples/bodies_and_joints.py) and as the
 hand-written scenes ``parallelogram`` and ``spatial-parallelogram``: one ``model.step`` (µs, best of repeats), the
-whole default ``gp.simulate`` over 10 s (ms) and its error against the one-degree-of-freedom model; beside them
-MuJoCo's A02 (one parallelogram cell, hinges and a ``connect``, RK4, dt = 1e-3) per step and over 10 s.
+whole default ``gp.simulate`` over 10 s (ms) and its error against the one-degree-of-freedom model; Bricard's
+mechanism (IFToMM A04) from bodies and joints; beside them MuJoCo's A02 (one parallelogram cell, hinges and a
+``connect``) and Bricard (a hinge chain closed by two ``connect``) at RK4, dt = 1e-3, per step and over 10 s.
 """
 
 from __future__ import annotations
@@ -70,27 +71,44 @@ def rows() -> list[dict[str, float | str]]:
 
     out.append(_row("spatial double parallelogram, bodies and joints", sp.model(), q0, v0, spatial_error))
     out.append(_row("spatial double parallelogram, hand-written", spatial.model, spatial.q0, spatial.v0, spatial_error))
+    br = example.bricard()
+    q0, v0 = br.assemble()
+    out.append(_row("Bricard (IFToMM A04), bodies and joints", br.model(), q0, v0, lambda traj: float("nan")))
     return out
 
 
-def mujoco_row() -> dict[str, float | str] | None:
+def mujoco_rows() -> list[dict[str, float | str]]:
+    """MuJoCo's A02 (``benchmarks/_mujoco_peers.py``) and Bricard (the gallery's MJCF: a hinge chain closed by two
+    soft connects, RK4 at dt = 1e-3) over 10 s."""
     try:
         import _mujoco_peers as mj
+        import mujoco
 
         ten = mj.parallelogram_ladder(1, t_end=10.0)
     except Exception as exc:  # mujoco is an optional extra
         print(f"(MuJoCo not run: {type(exc).__name__}: {exc})", file=sys.stderr)
-        return None
-    return dict(what="A02 four-bar, MuJoCo (hinges + connect, RK4 dt 1e-3)", step_us=ten["step_us"],
-                wall_ms=ten["wall_ms"], error=abs(ten["angle_error"]), rows=ten["rows"], nv=ten["nv"])  # fmt: skip
+        return []
+    a02 = dict(what="A02 four-bar, MuJoCo (hinges + connect, RK4 dt 1e-3)", step_us=ten["step_us"],
+               wall_ms=ten["wall_ms"], error=abs(ten["angle_error"]), rows=ten["rows"], nv=ten["nv"])  # fmt: skip
+    model = mujoco.MjModel.from_xml_string(example.bricard_mjcf(1e-3))
+    data = mujoco.MjData(model)
+
+    def run() -> None:
+        mujoco.mj_resetData(model, data)
+        mujoco.mj_step(model, data, 10_000)
+
+    wall = _wall_ms(run)
+    bricard = dict(what="Bricard, MuJoCo (hinge chain + 2 connects, RK4 dt 1e-3)", step_us=wall * 1e3 / 10_000,
+                   wall_ms=wall, error=float("nan"), rows=6, nv=int(model.nv))  # fmt: skip
+    return [a02, bricard]
 
 
 def main() -> None:
     warnings.simplefilter("ignore")
     table = rows()
-    mj = mujoco_row()
-    if mj is not None:
-        table.append(mj)
+    peers = mujoco_rows()
+    table += peers
+    mj = peers[0] if peers else None
     print(f"{'what':56s} {'rows':>5s} {'nv':>4s} {'step µs':>9s} {'10 s, ms':>9s} {'error':>9s}")
     print("-" * 97)
     for r in table:
@@ -101,6 +119,9 @@ def main() -> None:
     if mj is not None:
         print(f"A02 step, bodies / MuJoCo's mj_step: {float(bodies['step_us']) / float(mj['step_us']):.2f}")
         print(f"A02 10 s, bodies / MuJoCo: {float(bodies['wall_ms']) / float(mj['wall_ms']):.2f}")
+    if peers:
+        b, m = by["Bricard (IFToMM A04), bodies and joints"], peers[1]
+        print(f"Bricard step, bodies / MuJoCo's mj_step: {float(b['step_us']) / float(m['step_us']):.2f}")
     sb, sh = by["spatial double parallelogram, bodies and joints"], by["spatial double parallelogram, hand-written"]
     print(f"spatial loop step, bodies / hand-written: {float(sb['step_us']) / float(sh['step_us']):.2f}")
     print("errors: against the one-degree-of-freedom model (crank angle, rad, or crank centre, m); MuJoCo's: its "

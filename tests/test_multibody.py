@@ -192,33 +192,6 @@ def test_an_overconstrained_spatial_loop_moves_with_its_one_degree_of_freedom() 
     assert np.ptp(traj.energy) <= 1e-9 * np.abs(traj.energy).max()
 
 
-def _bricard_mjcf(dt: float) -> str:
-    """The same Bricard mechanism for MuJoCo: a chain of five hinged links from the ground (body frames at the
-    corners, axes along the rods in the inertial frames), closed by two ``connect`` equalities on the last hinge's
-    axis at the stiffest softness (time constant 2 dt)."""
-    corners, axes = example.BRICARD_CORNERS, example.BRICARD_AXES
-    bodies = ""
-    for i in range(5):
-        d, rel = corners[i + 1] - corners[i], corners[i] - (corners[i - 1] if i else 0.0)
-        x = np.array([1.0, 0.0, 0.0])
-        c, axis = float(x @ d), np.cross(x, d)
-        w = np.sqrt(2 * (1 + c)) / 2 if c > -1 + 1e-12 else 0.0
-        q = (w, *(axis / (2 * w))) if w > 0 else (0.0, 0.0, 0.0, 1.0)
-        bodies += (
-            f'<body name="link{i + 1}" pos="{rel[0]} {rel[1]} {rel[2]}"><joint type="hinge" axis="{axes[i][0]} '
-            f'{axes[i][1]} {axes[i][2]}"/><inertial pos="{d[0] / 2} {d[1] / 2} {d[2] / 2}" quat="{q[0]} {q[1]} '
-            f'{q[2]} {q[3]}" mass="1" diaginertia="{0.02 / 12} {1.01 / 12} {1.01 / 12}"/>'
-        )
-    a = corners[5] - corners[4]
-    soft = f'solref="{2 * dt} 1" solimp="0.9999 0.9999 0.001 0.5 2"'
-    return (
-        f'<mujoco><option gravity="0 -{G} 0" timestep="{dt}" integrator="RK4"><flag contact="disable"/></option>'
-        f"<worldbody>{bodies}{'</body>' * 5}</worldbody><equality>"
-        f'<connect body1="link5" anchor="{a[0]} {a[1]} {a[2]}" {soft}/>'
-        f'<connect body1="link5" anchor="{a[0] + 0.5} {a[1]} {a[2]}" {soft}/></equality></mujoco>'
-    )
-
-
 def test_bricards_mechanism_moves_as_mujoco_moves_it() -> None:
     """IFToMM A04 from bodies and joints (30 rows, rank 29) released from rest for 2 s, against MuJoCo's simulation
     of the same machine in joint coordinates (RK4, dt = 1e-4, the loop closed by soft connects): the link centres
@@ -226,7 +199,7 @@ def test_bricards_mechanism_moves_as_mujoco_moves_it() -> None:
     The negative control: a link 1 % heavier in gausspp is told apart."""
     mujoco = pytest.importorskip("mujoco")
     dt, times = 1e-4, np.linspace(0.1, 2.0, 20)
-    mj_model = mujoco.MjModel.from_xml_string(_bricard_mjcf(dt))
+    mj_model = mujoco.MjModel.from_xml_string(example.bricard_mjcf(dt))
     data = mujoco.MjData(mj_model)
     centres = []
     for k in range(round(2.0 / dt)):
