@@ -26,3 +26,9 @@ def best_us(fn: Callable[[], object], budget: float, repeats: int) -> float:
         return min(_run(fn, n) for _ in range(repeats)) / n * 1e6
     finally:
         gc.enable()
+
+
+def best_ms(fn: Callable[[], object], repeats: int = 3) -> float:
+    """Minimum over ``repeats`` of one call's wall time in ms, after one warm-up call (for calls of 10 ms and up)."""
+    fn()
+    return min(_run(fn, 1) for _ in range(repeats)) * 1e3

@@ -37,6 +37,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
+from _timing import best_ms  # noqa: E402
 
 #: Ladder sizes (the issue's range: N = 4 … 64).
 LADDER = (4, 8, 16, 32, 64)
@@ -51,16 +52,6 @@ def _best_us(fn: Any, repeats: int = 5, n: int = 200) -> float:
             fn()
         best = min(best, (time.perf_counter() - start) / n)
     return best * 1e6
-
-
-def _best_ms(fn: Any, repeats: int = 3) -> float:
-    fn()
-    best = np.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best * 1e3
 
 
 def measure(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
@@ -93,20 +84,20 @@ def measure(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
             run = gp.simulate(red.model, red.q0, red.v0, 2.0, record=grid, **kw)
         except Exception:  # a method this revision does not have
             continue
-        out[f"simulate four-bar-redundant 2 s, {label} (ms)"] = _best_ms(
+        out[f"simulate four-bar-redundant 2 s, {label} (ms)"] = best_ms(
             lambda kw=kw: gp.simulate(red.model, red.q0, red.v0, 2.0, record=grid, **kw), 2
         )
         out[f"  error vs minimal, {label}"] = float(np.abs(run.q - ref.q).max())
-    out["simulate saturated-crane 3 s (ms)"] = _best_ms(lambda: gp.simulate(crane.model, crane.q0, crane.v0, 3.0), 2)
+    out["simulate saturated-crane 3 s (ms)"] = best_ms(lambda: gp.simulate(crane.model, crane.q0, crane.v0, 3.0), 2)
     try:
         adams = dict(method="cvodes-adams", rtol=1e-9, atol=1e-9)
         gp.simulate(crane.model, crane.q0, crane.v0, 3.0, **adams)
-        out["simulate saturated-crane 3 s, cvodes-adams 1e-9 (ms)"] = _best_ms(
+        out["simulate saturated-crane 3 s, cvodes-adams 1e-9 (ms)"] = best_ms(
             lambda: gp.simulate(crane.model, crane.q0, crane.v0, 3.0, **adams), 2
         )
     except Exception:  # a method this revision does not have
         pass
-    out["simulate block-on-floor 3 s (ms)"] = _best_ms(lambda: gp.simulate(block.model, block.q0, block.v0, 3.0), 2)
+    out["simulate block-on-floor 3 s (ms)"] = best_ms(lambda: gp.simulate(block.model, block.q0, block.v0, 3.0), 2)
     try:
         double = scenes.get("parallelogram", third_bar=True)
         from gausspp.scenes import parallelogram as P
@@ -115,7 +106,7 @@ def measure(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
                           record=np.linspace(0, 1, 11))  # fmt: skip
         theta, omega = P.one_dof_reference(run.t, **double.params)
         qref = np.array([P.maximal_state(a, b, 0.0, 1, True)[0] for a, b in zip(theta, omega, strict=True)])
-        out["double parallelogram 1 s, cvodes-adams 1e-10 (ms)"] = _best_ms(
+        out["double parallelogram 1 s, cvodes-adams 1e-10 (ms)"] = best_ms(
             lambda: gp.simulate(double.model, double.q0, double.v0, 1.0, method="cvodes-adams", rtol=1e-10,
                                 atol=1e-10), 2)  # fmt: skip
         out["  error vs one-DOF reference (m)"] = float(np.abs(run.q - qref).max())
@@ -130,7 +121,7 @@ def measure(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
             start = time.perf_counter()
             gp.simulate(fresh.model, fresh.q0, fresh.v0, 10.0)
             out["spatial double parallelogram 10 s, defaults, first run (ms)"] = (time.perf_counter() - start) * 1e3
-            out["spatial double parallelogram 10 s, defaults (ms)"] = _best_ms(
+            out["spatial double parallelogram 10 s, defaults (ms)"] = best_ms(
                 lambda: gp.simulate(swing.model, swing.q0, swing.v0, 10.0), 2
             )
             out["  error vs one-DOF reference (m) "] = float(np.abs(run.q - qref).max())
@@ -148,7 +139,7 @@ def measure(ladder_sizes: tuple[int, ...] = LADDER) -> dict[str, float]:
                     qref = np.array([P.maximal_state(a, b, 0.0, 1, third)[0] for a, b in pairs])
                     key = f"{name} 10 s, {label}"
                     again = lambda sc=sc, tol=tol: gp.simulate(sc.model, sc.q0, sc.v0, 10.0, **tol)  # noqa: E731
-                    out[f"{key} (ms)"] = _best_ms(again, 2)
+                    out[f"{key} (ms)"] = best_ms(again, 2)
                     out[f"  collinear positions crossed, {key}"] = float(len(run.events))
                     out[f"  error vs one-DOF reference (m), {key}"] = float(np.abs(run.q - qref).max())
                     energy = run.energy

@@ -14,12 +14,11 @@ from __future__ import annotations
 
 import importlib.util
 import sys
-import time
 import warnings
 from pathlib import Path
 
 import numpy as np
-from _timing import best_us
+from _timing import best_ms, best_us
 
 import gausspp as gp
 from gausspp.scenes import parallelogram as P
@@ -31,21 +30,12 @@ example = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(example)
 
 
-def _wall_ms(call, repeats: int = 3) -> float:  # type: ignore[no-untyped-def]
-    best = np.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        call()
-        best = min(best, time.perf_counter() - start)
-    return best * 1e3
-
-
 def _row(label: str, model: gp.Model, q0: np.ndarray, v0: np.ndarray, error) -> dict[str, float | str]:  # type: ignore[no-untyped-def]
     model.step(0.0, q0, v0)
     step = best_us(lambda: model.step(0.0, q0, v0), 0.2, 5)
     grid = np.linspace(0.0, 10.0, 101)
     traj = gp.simulate(model, q0, v0, 10.0, record=grid)
-    wall = _wall_ms(lambda: gp.simulate(model, q0, v0, 10.0, record=grid))
+    wall = best_ms(lambda: gp.simulate(model, q0, v0, 10.0, record=grid))
     return dict(what=label, step_us=step, wall_ms=wall, error=error(traj), rows=model.k, nv=model.nv)
 
 
@@ -97,7 +87,7 @@ def mujoco_rows() -> list[dict[str, float | str]]:
         mujoco.mj_resetData(model, data)
         mujoco.mj_step(model, data, 10_000)
 
-    wall = _wall_ms(run)
+    wall = best_ms(run)
     bricard = dict(what="Bricard, MuJoCo (hinge chain + 2 connects, RK4 dt 1e-3)", step_us=wall * 1e3 / 10_000,
                    wall_ms=wall, error=float("nan"), rows=6, nv=int(model.nv))  # fmt: skip
     return [a02, bricard]

@@ -235,3 +235,14 @@ def test_a_prescribed_spin_is_kept_by_a_torque_about_its_axis() -> None:
     traj = gp.simulate(mb.model(), q0, v0, 1.0, record=np.linspace(0.0, 1.0, 11))
     assert np.abs(traj.v[:, 5] - 2.0 * traj.t).max() <= 1e-8
     assert np.abs(traj.u[:, -1] - 2.0 / 3.0).max() <= 1e-8
+
+
+def test_a_planar_revolute_with_an_axis_and_bad_numbers_are_refused() -> None:
+    mb = gp.Multibody(gravity=(0.0, -G))
+    mb.body("bar", mass=1.0, inertia=1.0, at=(0, 0))
+    with pytest.raises(gp.InputError, match="give no axis"):
+        mb.revolute("pin", "bar", (0, 0), None, (0, 0), axis=(0, 0, 1))
+    with pytest.raises(gp.NonFiniteError, match="at"):
+        mb.body("nan", mass=1.0, inertia=1.0, at=(np.nan, 0))
+    with pytest.raises(gp.InputError, match="gravity"):
+        gp.Multibody(gravity=(0.0, np.inf))

@@ -28,7 +28,7 @@ class Bodies(Mechanism):
         self.bodies = list(bodies)
         nq, nv = sum(b.nq for b in self.bodies), sum(b.nv for b in self.bodies)
         self._symbols(nq, nv)
-        q, v, t = self.q, self.v, self.t
+        q, v = self.q, self.v
         g = ca.DM(np.asarray(gravity, float))
         blocks, forces, loads, qdots, kinetic, potential = [], [], [], [], ca.SX(0), ca.SX(0)
         for b in self.bodies:
@@ -36,7 +36,7 @@ class Bodies(Mechanism):
             m = b.mass
             if b.planar:
                 blocks.append(ca.DM(np.diag([m, m, b.inertia[0, 0]])))
-                applied = self._load(b, c, w, t, 3)
+                applied = self._load(b, w, 3)
                 forces.append(ca.vertcat(m * g, 0) + applied)
                 qdots.append(w)
                 kinetic += 0.5 * (m * ca.dot(w[:2], w[:2]) + b.inertia[0, 0] * w[2] ** 2)
@@ -44,7 +44,7 @@ class Bodies(Mechanism):
             else:
                 J = ca.DM(b.inertia)
                 blocks.append(ca.diagcat(ca.DM(np.eye(3) * m), J))
-                applied = self._load(b, c, w, t, 6)
+                applied = self._load(b, w, 6)
                 omega = w[3:6]
                 forces.append(ca.vertcat(m * g, -ca.cross(omega, J @ omega)) + applied)
                 p = c[3:7]
@@ -61,13 +61,12 @@ class Bodies(Mechanism):
         self.velocity_names = tuple(n for b in self.bodies for n in b.velocity_names())
         self._quaternions = [slice(b.q_start + 3, b.q_start + 7) for b in self.bodies if not b.planar]
 
-    @staticmethod
-    def _load(b: Body, c: ca.SX, w: ca.SX, t: ca.SX, n: int) -> ca.SX:
+    def _load(self, b: Body, w: ca.SX, n: int) -> ca.SX:
         """The body's applied force and torque as a generalized force (``n`` entries): ``load(r, R, v, t)``."""
         if b.load is None:
             return ca.SX.zeros(n)
-        r, R = b.parts(ca.vertcat(ca.SX.zeros(b.q_start), c))
-        return evaluate(b.load, (r, R, w, t), (n, 1), f"body {b.name!r}: load(r, R, v, t)")
+        r, R = b.parts(self.q)
+        return evaluate(b.load, (r, R, w, self.t), (n, 1), f"body {b.name!r}: load(r, R, v, t)")
 
     def normalize(self, q: ca.SX) -> ca.SX:
         """Each spatial body's quaternion of unit length."""

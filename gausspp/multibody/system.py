@@ -58,6 +58,7 @@ class Multibody:
         self._extra: list[Constraint] = []
         self._ground_points: list[np.ndarray] = []
         self._mechanism: Bodies | None = None
+        self._assembly: tuple[ca.Function, ...] | None = None  # built on first assemble, dropped on any change
 
     # -- bodies -----------------------------------------------------------------------------------------
     def body(
@@ -101,7 +102,7 @@ class Multibody:
         q_start = sum(b.nq for b in self._bodies.values())
         v_start = sum(b.nv for b in self._bodies.values())
         self._bodies[name] = replace(made, q_start=q_start, v_start=v_start, points=[])
-        self._mechanism = None
+        self._mechanism = self._assembly = None
         return name
 
     def _body(self, name: str | None, joint: str) -> Body | None:
@@ -123,6 +124,7 @@ class Multibody:
             if full in taken:
                 raise InputError(f"Multibody.{kind}: a joint {name!r} exists already")
             self._rows.append((full, fn, realization))
+        self._assembly = None
 
     def _attach(self, a: Body, pa: np.ndarray, b: Body | None, pb: np.ndarray) -> None:
         a.points.append(pa)
@@ -141,6 +143,8 @@ class Multibody:
         assert A_ is not None
         pa_, pb_ = self._point(name, pa), self._point(name, pb)
         rows = J.coincide(A_, pa_, B_, pb_, self.dim)
+        if self.planar and axis is not None:
+            raise InputError(f"revolute {name!r}: a planar revolute turns about the plane's normal; give no axis")
         if not self.planar:
             if axis is None:
                 raise InputError(f"revolute {name!r}: a spatial revolute needs its axis (in body {a!r}'s axes)")
@@ -252,6 +256,7 @@ class Multibody:
             return ca.DM(d)
 
         kept = Force(M=torque_pair) if realization is None else realization
+        self._assembly = None
         self._extra.append(
             Holonomic(lambda q, t: J.angle(B_, q) - J.angle(A_, q) - law(t), name=f"motor {name}", realization=kept)
         )
@@ -273,6 +278,7 @@ class Multibody:
             return ca.DM(d)
 
         kept = Force(M=along) if realization is None else realization
+        self._assembly = None
         self._extra.append(
             Constraint(
                 lambda q, v, t: ca.dot(v[B_.v_start + 3 : B_.v_start + 6], ca.DM(e)) - law(t),
@@ -338,7 +344,9 @@ class Multibody:
         for i, value in zip(held, (fix or {}).values(), strict=True):
             q_now[i] = float(value)
         free = [i for i in range(len(names)) if i not in held]
-        g_fn, G_fn, Jv_fn, phi0_fn = self._functions()
+        if self._assembly is None:
+            self._assembly = self._functions()
+        g_fn, G_fn, Jv_fn, phi0_fn = self._assembly
         scale = 1.0 + float(np.max(np.abs(q_now)))
         for _ in range(ASSEMBLY_ITERATIONS):
             q_now = mech.normalize_array(q_now)
