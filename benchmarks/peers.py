@@ -277,7 +277,13 @@ def print_ratios(rows: list[Row]) -> None:
             continue
         field = "per_step_us" if den is pc else "wall_ms"
         ratio = getattr(by[num], field) / getattr(den, field)
-        print(f"  {label}: {ratio:6.2f}   target ≤ {target:g}: {'met' if ratio <= target else 'NOT met'}")
+        met = ratio <= target
+        accuracy = ""
+        if "default" in num:  # issue 30: the default call at an error ≤ 1e-10
+            error = max(by[num].error_q, by[num].error_v)
+            met = met and error <= 1e-10
+            accuracy = f" at error {error:.1e} (≤ 1e-10)"
+        print(f"  {label}: {ratio:6.2f}{accuracy}   target ≤ {target:g}: {'met' if met else 'NOT met'}")
 
 
 def print_agreement(scene: gp.scenes.Scene) -> None:
@@ -288,7 +294,7 @@ def print_agreement(scene: gp.scenes.Scene) -> None:
     from gausspp.simulation import compiled_adaptive
     from gausspp.simulation.drift import Stabilization
     from gausspp.simulation.initial import initial_state
-    from gausspp.simulation.rhs import RightHandSide
+    from gausspp.simulation.rhs import RightHandSide, step_control_atol
 
     m = scene.model
     q, v, lam = initial_state(m, 0.0, scene.q0, scene.v0, None)
@@ -298,10 +304,14 @@ def print_agreement(scene: gp.scenes.Scene) -> None:
         rhs = RightHandSide(m, solver, None, Stabilization())
         out = []
         for cls in (si.DOP853, compiled_adaptive.solver_class("DOP853", rhs)):
-            run = si.solve_ivp(rhs, (0.0, scene.t_end), y0, method=cls, t_eval=times, rtol=1e-10, atol=1e-12)
+            # the default call's tolerances (rtol = atol = 1e-10), the work integrals left out of the step control
+            # as gp.simulate leaves them. (With atol = 1e-12 the first steps from rest are chosen by the round-off
+            # of components that start at zero, where the two routes' round-off differs: 2e-11 apart for the QP.)
+            atol = step_control_atol(1e-10, y0.size)
+            run = si.solve_ivp(rhs, (0.0, scene.t_end), y0, method=cls, t_eval=times, rtol=1e-10, atol=atol)
             out.append(run.y.T)
         diff = float(np.abs(out[0] - out[1]).max() / (1.0 + np.abs(out[0]).max()))
-        print(f"\ncompiled DOP853 vs scipy's DOP853 ({solver}, rtol 1e-10, atol 1e-12): {diff:.1e} relative (≤ 1e-12)")
+        print(f"\ncompiled DOP853 vs scipy's DOP853 ({solver}, rtol = atol = 1e-10): {diff:.1e} relative (≤ 1e-12)")
 
 
 def figure(rows: list[Row], path: str) -> None:

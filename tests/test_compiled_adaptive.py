@@ -4,6 +4,7 @@ tolerances: the same steps to round-off, the same states at the record times, th
 from __future__ import annotations
 
 import re
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -14,7 +15,7 @@ import gausspp as gp
 from gausspp.simulation import compiled_adaptive
 from gausspp.simulation.drift import Stabilization
 from gausspp.simulation.initial import initial_state
-from gausspp.simulation.rhs import RightHandSide
+from gausspp.simulation.rhs import RightHandSide, step_control_atol
 from gausspp.step.bound import Bound
 
 #: (scene, parameters, step solver): equality rows (direct and the QP in the graph), λ-states of an inertial
@@ -35,9 +36,11 @@ def _start(name: str, params: dict, solver: str) -> tuple[RightHandSide, np.ndar
     return RightHandSide(m, solver, None, Stabilization()), np.concatenate([q, v, lam, [0.0, 0.0]]), scene.t_end
 
 
-def _run(cls: type, rhs: RightHandSide, y0: np.ndarray, t_end: float, times: np.ndarray) -> tuple[int, np.ndarray]:
+def _run(
+    cls: type, rhs: RightHandSide, y0: np.ndarray, t_end: float, times: np.ndarray, atol: Any = 1e-10
+) -> tuple[int, np.ndarray]:
     """Steps to ``t_end``; the states at ``times`` from each step's dense output."""
-    solver = cls(rhs, 0.0, y0, t_end, rtol=1e-10, atol=1e-10)
+    solver = cls(rhs, 0.0, y0, t_end, rtol=1e-10, atol=atol)
     out, steps = np.empty((times.size, y0.size)), 0
     while solver.status == "running":
         t_old = solver.t
@@ -116,7 +119,7 @@ def test_simulate_takes_the_compiled_stages_and_gives_scipys_trajectory() -> Non
     times = np.linspace(0.0, 2.0, 21)
     traj = gp.simulate(scene.model, scene.q0, scene.v0, 2.0, record=times, rtol=1e-10, atol=1e-10, solver="direct")
     rhs, y0, _ = _start("pendulum", {}, "direct")
-    _, ref = _run(si.DOP853, rhs, y0, 2.0, times[1:])
+    _, ref = _run(si.DOP853, rhs, y0, 2.0, times[1:], step_control_atol(1e-10, y0.size))
     nq, nv = scene.model.nq, scene.model.nv
     assert np.abs(traj.q[1:] - ref[:, :nq]).max() <= 1e-12 * (1 + np.abs(ref).max())
     assert np.abs(traj.v[1:] - ref[:, nq : nq + nv]).max() <= 1e-12 * (1 + np.abs(ref).max())
@@ -144,3 +147,57 @@ def test_a_stage_that_fails_hands_the_step_to_python_which_names_the_failure(mon
     assert type(plain.failure) is type(traj.failure)
     assert abs(_failure_time(plain) - _failure_time(traj)) <= 1e-5
     assert plain.t.size == traj.t.size  # the steps' times agree to the error norm's round-off, not bitwise
+
+
+def test_the_work_integrals_do_not_choose_the_step() -> None:
+    """``W_R, W_F`` are quadratures: noise in the reaction's power (an ideal constraint's is round-off) leaves the
+    steps of a run with :func:`step_control_atol` as they were; with one ``atol`` for the whole state (the negative
+    control) the same noise changes them."""
+
+    class Noisy(RightHandSide):
+        def __call__(self, t: float, y: np.ndarray) -> np.ndarray:
+            out = super().__call__(t, y).copy()
+            out[-2] += 1e-9 * np.sin(1e4 * t)  # a power of 1e-9 W, fast: an estimated error far above atol
+            return out
+
+    scene = gp.scenes.get("pendulum")
+    q, v, lam = initial_state(scene.model, 0.0, scene.q0, scene.v0, None)
+    y0 = np.concatenate([q, v, lam, [0.0, 0.0]])
+
+    def steps(cls: type, atol: Any) -> list[float]:
+        solver = si.DOP853(cls(scene.model, "direct", None, Stabilization()), 0.0, y0, 1.0, rtol=1e-9, atol=atol)
+        ts = []
+        while solver.status == "running":
+            solver.step()
+            ts.append(solver.t)
+        return ts
+
+    tol = step_control_atol(1e-12, y0.size)
+    assert np.isinf(tol[-2:]).all() and (tol[:-2] == 1e-12).all()
+    clean = steps(RightHandSide, tol)
+    np.testing.assert_allclose(steps(Noisy, tol), clean, rtol=0, atol=1e-12)
+    assert len(steps(Noisy, 1e-12)) > 2 * len(clean)
+
+
+@pytest.mark.parametrize("method", ["RK45", "DOP853", "Radau"])
+def test_a_solver_retargeted_stops_there_and_goes_on(method: str) -> None:
+    """``retarget`` moves the end of a running solver (an approach of a singular position) and back: it stops
+    exactly at the new end, goes on from there with its own step size, and ends where a plain run does
+    (``y' = −y``: ``e⁻¹`` at 1 to the tolerance)."""
+    assert issubclass(compiled_adaptive.CompiledDOP853, compiled_adaptive.Retargetable)  # the compiled ones too
+    cls = compiled_adaptive._retargetable(getattr(si, method))
+    solver = cls(lambda t, y: -y, 0.0, np.array([1.0]), 1.0, rtol=1e-10, atol=1e-12)
+    solver.step()
+    solver.retarget(0.5)
+    while solver.status == "running":
+        solver.step()
+    assert solver.status == "finished" and solver.t == 0.5
+    h_before = solver.step_size
+    solver.retarget(1.0)
+    assert solver.status == "running"
+    while solver.status == "running":
+        solver.step()
+    assert solver.t == 1.0 and abs(solver.y[0] - np.exp(-1.0)) <= 1e-8
+    assert h_before is not None and h_before > 0
+    solver.retarget(0.75)  # behind it: nothing to do
+    assert solver.status == "finished"

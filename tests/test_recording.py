@@ -120,6 +120,27 @@ def test_a_symmetric_s_is_known_from_the_expressions():
     assert not np.allclose(stacked_margins(B, 4, 4, symmetric=True), np.linalg.svd(B)[1][:, -1], rtol=1e-3)
 
 
+@pytest.mark.parametrize("solver", ["direct", "qp"])
+def test_the_recording_takes_whole_chunks_then_short_ones_sample_by_sample_right(solver):
+    """201 samples: one call over CHUNK = 128 samples, then five over TAIL_CHUNK = 16 (the last padded) — each
+    sample's step the single step's at its state, the samples in order."""
+    from gausspp.simulation.rhs import CHUNK, TAIL_CHUNK
+
+    sc = gp.scenes.get("pendulum")
+    traj = gp.simulate(sc.model, sc.q0, sc.v0, 0.2, dt=1e-3, method="rk4", solver=solver)
+    assert traj.t.size > CHUNK and (traj.t.size - CHUNK) % TAIL_CHUNK  # a padded tail call
+    rhs = RightHandSide(sc.model, solver, None, Stabilization())
+    y = samples_of(sc.model, traj).y
+    out, margin, good = rhs.evaluate_all(traj.t, y)
+    assert good == traj.t.size
+    states = zip(traj.t, y, strict=True)
+    single = np.array([rhs.evaluate(t, yi, stabilized=False)["a"].ravel().copy() for t, yi in states])
+    scale = np.abs(single).max()
+    np.testing.assert_allclose(out["a"][:, :, 0], single, rtol=0, atol=1e-12 * scale)
+    shifted = np.roll(out["a"][:, :, 0], 1, axis=0)  # negative control: a sample's step is told from its neighbour's
+    assert np.abs(shifted - single).max() > 1e-6 * scale
+
+
 def test_the_places_of_stored_entries_follow_casadis_column_major_order():
     """_places maps a mapped output's nonzeros to (sample, row, column), for a pattern that is not symmetric."""
     import casadi as ca
@@ -133,7 +154,7 @@ def test_the_places_of_stored_entries_follow_casadis_column_major_order():
         block[0, 1], block[2, 0], block[1, 3], block[2, 3] = rng.normal(size=4) + 5.0  # nonzero, not symmetric
         blocks.append(block)
     stacked = ca.sparsify(ca.DM(np.hstack(blocks)))  # the samples' blocks side by side, as a mapped output
-    sample, row, col = _places(stacked.sparsity())
+    sample, row, col = _places(stacked.sparsity(), CHUNK)
     rebuilt = np.zeros((CHUNK, 3, 4))
     rebuilt[sample, row, col] = np.asarray(stacked.nonzeros())
     np.testing.assert_array_equal(rebuilt, np.array(blocks))

@@ -162,7 +162,8 @@ def test_energies_of_the_two_models(case: str) -> None:
     times = np.linspace(0.0, 10.0, 101)[1:]
     tg = gp.simulate(g.model, g.q0, g.v0, 10.0, record=times, **TIGHT)
     te = gp.simulate(e.model, e.q0, e.v0, 10.0, record=times, **TIGHT)
-    np.testing.assert_allclose(te.energy - tg.energy, tg.lam[:, 0] ** 2 / (2 * Jr), rtol=0, atol=1e-10 * Ee)
+    scale = np.abs(te.energy).max()  # the rotor pumps energy in: up to 80 times the initial (the run's scale)
+    np.testing.assert_allclose(te.energy - tg.energy, tg.lam[:, 0] ** 2 / (2 * Jr), rtol=0, atol=1e-11 * scale)
 
 
 @pytest.mark.parametrize("name", ["gyrostat", "gyrostat-extended"])

@@ -15,6 +15,7 @@ import numpy as np
 
 from .. import scenes
 from ..simulation import methods
+from ..simulation.inputs import DEFAULT_ATOL, DEFAULT_RTOL
 from ..step import qp
 from ..studies.tables import one_line
 from .console import EXIT_USAGE
@@ -88,9 +89,9 @@ def _simulation_options(p: argparse.ArgumentParser, rtol: float, samples: int) -
     p.add_argument(
         "--atol",
         type=_positive(float),
-        default=1e-12,
+        default=DEFAULT_ATOL,
         metavar="A",
-        help="absolute tolerance of adaptive methods (default: 1e-12)",
+        help=f"absolute tolerance of adaptive methods (default: {DEFAULT_ATOL:g})",
     )
     p.add_argument(
         "--samples",
@@ -219,7 +220,7 @@ def _add_run(sub: Any, common: Parser) -> None:
         epilog=_EXIT_CODES,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    _simulation_options(r, rtol=1e-9, samples=500)
+    _simulation_options(r, rtol=DEFAULT_RTOL, samples=500)
     r.add_argument(
         "--solver",
         choices=("qp", "direct"),

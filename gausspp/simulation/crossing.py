@@ -33,11 +33,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+import casadi as ca
 import numpy as np
 import scipy.integrate as si
 
 from ..errors import GaussppError, IntegrationError
 from ..model.model import Model
+from ..step.bound import Bound, load_inputs
+from ..workspace import workspace
 from .initial import Projection
 
 #: Where ``t*`` lies in the bridging step, as a fraction of it: midway in the widest gap of DOP853's nodes
@@ -51,6 +54,10 @@ RANK_TOL = 1e-8
 #: motion's).
 LOOKAHEAD = 2.0
 REMEMBER = 8
+#: … unless Newton's zero lies beyond this times the secant's: ``σ_r`` flattening out, the bottom of a dip above zero
+#: (the pendulum's pin, 2.7) — where it does reach zero it is linear or steepening (the parallelogram, ≤ 1.0
+#: measured at every approach): the next samples, nearer, tell again.
+CONVEX = 1.5
 #: The bridge is at most this share of the run's recent longest step: a step that evaluates the motion near a
 #: singular position is less accurate than an ordinary step of its length (measured on the parallelogram at
 #: rtol = 1e-12: a 1e-10 J energy error per bridge at the full step, none seen at 0.6 of it).
@@ -60,8 +67,11 @@ CLOSE_ENOUGH = 1.2
 #: … and when two successive estimates agree within this share of the distance to it: ``σ_r`` vanishes there,
 #: where a dip of ``σ_r`` that stays above zero (two singular values changing places) moves the estimate away.
 AGREE = 0.1
-#: A minimum of ``σ_r`` between samples below this share of its neighbours' is a singular position a step went over.
-WENT_OVER = 0.05
+#: A minimum of ``σ_r`` below this between two samples is checked for a singular position a step went over (loose
+#: tolerances step over one in steps across which ``σ_r`` changes by ~0.4).
+WENT_OVER_BELOW = 0.5
+#: … by the change of sign of ``σ_r``, told where the singular vectors turned less than this (``|cos|``).
+ALIGNED = 0.5
 #: … and only once ``σ_r`` has fallen below this (unit-free, ``σ ≤ 1``): far from a singular position a falling
 #: trend is no reason to step over anything.
 WATCH_BELOW = 0.2
@@ -87,15 +97,47 @@ def applies(model: Model) -> bool:
 def smallest_kept(model: Model, t: float, y: np.ndarray, rank: int | None = None) -> tuple[float, int]:
     """``(σ_r, r)``: the ``r``-th singular value of the rows ``J`` normalized in the kinetic metric (``J L⁻ᵀ``,
     ``A = L Lᵀ``, each row scaled to unit length), and ``r`` (counted at this state unless given)."""
-    nq, nv, nl = model.nq, model.nv, model.n_lam
-    data = model.evaluate_data(t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl])
-    rows = np.linalg.solve(np.linalg.cholesky(data.A), data.J.T).T
-    norms = np.linalg.norm(rows, axis=1)
-    rows = rows[norms > 0] / norms[norms > 0, None]
+    rows = _normalized_rows(model, t, y)
     sigma = np.linalg.svd(rows, compute_uv=False) if rows.size else np.zeros(0)
     if rank is None:
         rank = int(np.count_nonzero(sigma > RANK_TOL * sigma[0])) if sigma.size else 0
     return (float(sigma[rank - 1]) if 0 < rank <= sigma.size else 0.0), rank
+
+
+def smallest_pair(model: Model, t: float, y: np.ndarray, rank: int) -> tuple[float, np.ndarray, np.ndarray]:
+    """``(σ_r, u, v)``: :func:`smallest_kept`'s singular value with its left and right singular vectors."""
+    U, sigma, Vt = np.linalg.svd(_normalized_rows(model, t, y), full_matrices=False)
+    return float(sigma[rank - 1]), U[:, rank - 1], Vt[rank - 1]
+
+
+def _normalized_rows(model: Model, t: float, y: np.ndarray) -> np.ndarray:
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    bound = workspace(model).get(("crossing: A and J",), lambda: _mass_and_rows(model))
+    load_inputs(bound.args, (t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], np.zeros(2)))
+    bound.eval()
+    A, J = bound.output(0), bound.output(1)
+    rows = np.linalg.solve(np.linalg.cholesky(A), J.T).T
+    norms = np.linalg.norm(rows, axis=1)
+    return rows[norms > 0] / norms[norms > 0, None]
+
+
+def _mass_and_rows(model: Model) -> Bound:
+    """``(t, q, v, λ, stab) ↦ (A, J)`` bound (the two of the step's data the watch needs)."""
+    p = model.expressions
+    return Bound(ca.Function("mass_and_rows", model.inputs, [ca.densify(p.A), ca.densify(p.J)]))
+
+
+def sign_changed(a: tuple[float, np.ndarray, np.ndarray], b: tuple[float, np.ndarray, np.ndarray]) -> bool | None:
+    """Whether ``σ_r`` changed sign between two states, from its singular pairs ``(σ, u, v)`` there: ``True``,
+    ``False``, or ``None`` when the vectors turned too far to tell (:data:`ALIGNED`).
+
+    Followed continuously, ``σ_r = uᵀ M v`` is a smooth function of time that passes through zero at a singular
+    position; an SVD reports ``|σ_r|`` and makes it positive by flipping ``u`` or ``v``. The SVD's own freedom
+    flips both at once, which leaves ``(u_a·u_b)(v_a·v_b)`` unchanged: its sign says whether ``σ_r`` did."""
+    uu, vv = float(a[1] @ b[1]), float(a[2] @ b[2])
+    if min(abs(uu), abs(vv)) < ALIGNED:
+        return None
+    return uu * vv < 0
 
 
 @dataclass(frozen=True)
@@ -126,6 +168,8 @@ class SingularityWatch:
         self.model, self.rhs = model, rhs
         sigma, self.rank = smallest_kept(model, t0, y0)
         self.history: list[tuple[float, float]] = [(t0, sigma)]
+        #: ``y`` at the last three samples of :attr:`history`
+        self.states: list[np.ndarray] = [np.array(y0, float)]
         self.target: float | None = None
         #: The singular instant estimated at the last accepted state (``None``: none was).
         self.estimate: float | None = None
@@ -135,23 +179,31 @@ class SingularityWatch:
         self.stepped: list[dict[str, Any]] = []
 
     def sigma(self, t: float, y: np.ndarray) -> float:
-        """``σ_r`` at ``(t, y)``: from the margin of the step's last evaluation if it was there (independent rows:
-        the margin is the smallest eigenvalue of the normalized ``J A⁻¹ Jᵀ``, ``σ_r²``), else computed."""
-        margin = self.rhs.margin_at(t, y) if self.rank == self.model.k and hasattr(self.rhs, "margin_at") else None
-        return float(np.sqrt(margin)) if margin is not None else smallest_kept(self.model, t, y, self.rank)[0]
+        """``σ_r`` at ``(t, y)``: with independent rows the step's margin is the smallest eigenvalue of the
+        normalized ``J A⁻¹ Jᵀ``, ``σ_r²`` — the last evaluation's if it was there, else one compiled step call's;
+        otherwise (dependent rows, a step from Python) computed here."""
+        if self.rank == self.model.k and hasattr(self.rhs, "margin_at"):
+            margin = self.rhs.margin_at(t, y)
+            if margin is None:
+                margin = self.rhs.margin(t, y)
+            if np.isfinite(margin):
+                return float(np.sqrt(margin))
+        return smallest_kept(self.model, t, y, self.rank)[0]
 
     def restart(self, t: float, y: np.ndarray) -> None:
         """A fresh trend after a bridge (the ``σ_r`` on the far side rises)."""
         self.history, self.target, self.estimate = [(t, self.sigma(t, y))], None, None
+        self.states = [np.array(y, float)]
 
-    def observe(self, t: float, y: np.ndarray, dense: Any) -> Approach | Cross | None:
-        """Take the accepted state ``(t, y)`` (``dense()``: the last step's dense output, built only if needed); say
-        what to do next."""
+    def observe(self, t: float, y: np.ndarray, rate: Any) -> Approach | Cross | None:
+        """Take the accepted state ``(t, y)`` (``rate()``: ``ẏ`` there, asked for only if needed); say what to do
+        next."""
         if not self.rank:
             return None
         sigma = self.sigma(t, y)
         t_prev, s_prev = self.history[-1]
         self.history = [*self.history[-REMEMBER:], (t, sigma)]
+        self.states = [*self.states[-2:], y.copy()]
         self._went_over()
         h = t - t_prev
         if self.target is not None and t < self.target:
@@ -160,18 +212,22 @@ class SingularityWatch:
         previous, self.estimate = self.estimate, None
         if not (h > 0 and sigma < WATCH_BELOW and sigma < s_prev):
             return None
-        longest = float(np.max(np.diff([ti for ti, _ in self.history])))
+        times = [ti for ti, _ in self.history]
+        longest = max(b - a for a, b in zip(times, times[1:], strict=False))
         if previous is not None:  # planning a crossing: the steps shorten on the way, the step before them counts
             longest = max(longest, self.span)
         self.span = longest
-        if sigma * h / (s_prev - sigma) > 2 * LOOKAHEAD * longest:  # the secant's zero: far ahead, no need to look
+        secant = sigma * h / (s_prev - sigma)
+        if secant > 2 * LOOKAHEAD * longest:  # the secant's zero: far ahead, no need to look
             return None
-        behind = 1e-2 * h  # Newton's step from the slope at t (the secant lags behind it)
-        slope = (sigma - self.sigma(t - behind, np.asarray(dense()(t - behind)))) / behind
+        # Newton's step from the slope at t (the secant lags behind it): σ a moment back along the tangent, whose
+        # O(behind²) offset from the motion is the one-sided difference's own order of error
+        behind = 1e-2 * h
+        slope = (sigma - self.sigma(t - behind, y - behind * np.asarray(rate()))) / behind
         if not slope < 0:
             return None
         ahead = sigma / -slope
-        if ahead > LOOKAHEAD * longest:
+        if ahead > LOOKAHEAD * longest or ahead > CONVEX * secant:
             return None
         self.estimate = t + ahead
         if ahead <= CLOSE_ENOUGH * FRACTION * BRIDGE_SHARE * longest:
@@ -183,16 +239,49 @@ class SingularityWatch:
         return Approach(self.target)
 
     def _went_over(self) -> None:
-        """Note a singular position one of the run's steps went over: ``σ_r`` fell, then rose, its parabola in
-        ``σ_r²`` through the three samples dipping to (nearly) zero between them."""
-        if len(self.history) < 3:
+        """Note a singular position one of the run's steps went over: ``σ_r`` fell, then rose, and changed sign
+        between two of the last three samples (:func:`sign_changed`) — a dip of ``σ_r`` that stays above zero
+        does not. On the other side of the minimum the vectors may be another singular value's (two values of
+        ``σ`` cross there): that side's verdict is "cannot tell", not "no". The instant: the zero of the parabola
+        through the signed values."""
+        if len(self.history) < 3 or len(self.states) < 3:
             return
         (t0, s0), (t1, s1), (t2, s2) = self.history[-3:]
-        if not (s1 < s0 and s1 < s2 and s1 < WATCH_BELOW):
+        if not (s1 < s0 and s1 < s2 and s1 < WENT_OVER_BELOW):
             return
-        a, b, c = np.polyfit([t0 - t1, 0.0, t2 - t1], [s0**2, s1**2, s2**2], 2)
-        if a > 0 and c - b * b / (4 * a) < (WENT_OVER * max(s0, s2)) ** 2:
-            self.stepped.append({"t": float(t1 - b / (2 * a)), "kind": "singular position", "from": t0, "to": t2})
+        first, last = (
+            smallest_pair(self.model, t, y, self.rank) for t, y in ((t0, self.states[0]), (t2, self.states[2]))
+        )
+        if sign_changed(first, last) is False:
+            return  # the same sign at both ends, told: no zero or two (most dips end here, two SVDs)
+        middle = smallest_pair(self.model, t1, self.states[1], self.rank)
+        before, after = sign_changed(first, middle), sign_changed(middle, last)
+        if (before is True) == (after is True):
+            return  # no change of sign that can be told, or two (σ_r back through zero: not one position)
+        signed = (s0, -s1, -s2) if before else (s0, s1, -s2)
+        t_star = _zero_between(t0, t1, t2, *signed, (t0, t1) if before else (t1, t2))
+        self.stepped.append({"t": t_star, "kind": "singular position", "from": t0, "to": t2})
+
+
+def _zero_between(
+    t0: float, t1: float, t2: float, f0: float, f1: float, f2: float, bracket: tuple[float, float]
+) -> float:
+    """The zero in ``bracket`` of the parabola through ``(t_i, f_i)`` (the secant's where it has none there)."""
+    a, b, c = _parabola(t0 - t1, t2 - t1, f0, f1, f2)
+    lo, hi = bracket
+    roots = np.roots([a, b, c]) + t1 if a else np.array([t1 - c / b]) if b else np.zeros(0)
+    inside = [float(r.real) for r in np.atleast_1d(roots) if abs(r.imag) < 1e-12 and lo <= r.real <= hi]
+    if inside:
+        return inside[0]
+    fa, fb = (f0, f1) if bracket == (t0, t1) else (f1, f2)
+    return float(lo + (hi - lo) * fa / (fa - fb))
+
+
+def _parabola(x0: float, x2: float, f0: float, f1: float, f2: float) -> tuple[float, float, float]:
+    """``(a, b, c)`` of ``a x² + b x + c`` through ``(x0, f0)``, ``(0, f1)``, ``(x2, f2)`` (``x0 < 0 < x2``)."""
+    d0, d2 = (f0 - f1) / x0, (f2 - f1) / x2  # divided differences on either side of 0
+    a = (d2 - d0) / (x2 - x0)
+    return a, d0 - a * x0, f1
 
 
 @dataclass(frozen=True)

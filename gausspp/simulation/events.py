@@ -33,8 +33,8 @@ from .contacts import active_set, gaps, phase_step
 from .drift import Stabilization, as_stabilization
 from .event_watch import PhaseWatch, StepDense
 from .initial import check_on_constraint, initial_state
-from .inputs import Options, check_options
-from .rhs import RightHandSide
+from .inputs import DEFAULT_ATOL, DEFAULT_RTOL, Options, check_options
+from .rhs import RightHandSide, step_control_atol
 from .samples import Samples
 from .trajectory import Trajectory
 
@@ -55,8 +55,8 @@ def simulate_contacts(
     solver: str = "direct",
     backend: str | None = None,
     stabilize: Any = None,
-    rtol: float = 1e-10,
-    atol: float = 1e-12,
+    rtol: float = DEFAULT_RTOL,
+    atol: float = DEFAULT_ATOL,
     constraint_tol: float = 1e-8,
     throw: bool = True,
     rest_speed: float = 1e-6,
@@ -189,7 +189,7 @@ class EventRun:
         rhs = RightHandSide(sub, sub_solver, sub_backend, self.stab)
         self.phases.append(active)
         inactive = [i for i in range(len(model.contact_row_names)) if i not in active]
-        options: dict[str, Any] = {"rtol": opts.rtol, "atol": opts.atol}
+        options: dict[str, Any] = {"rtol": opts.rtol, "atol": step_control_atol(opts.atol, y.size)}
         if opts.dt is not None:
             options["max_step"] = opts.dt
         cols = self.model.m + np.arange(len(active))

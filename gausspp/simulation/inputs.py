@@ -28,6 +28,15 @@ MAX_STEPS = 10**10
 MAX_KEPT_BYTES = 2**31
 
 
+#: The default tolerances of adaptive runs (``gp.simulate``, ``gausspp run``): the error each step admits on
+#: ``(q, v, λ)`` is ``atol + rtol·|y|``. One value for both: an ``atol`` far below ``rtol`` makes a component that
+#: starts at exactly zero (a pendulum released at rest) choose the first steps from its round-off — more steps
+#: and no better motion (the pendulum over 2 s: 40 steps and 1.1e-10 at 1e-9/1e-12, 37 and 2.5e-11 at
+#: 1e-10/1e-10, ``benchmarks/peers.py``). A state whose scale is far below 1 (micrometres) wants a lower ``atol``.
+DEFAULT_RTOL = 1e-10
+DEFAULT_ATOL = 1e-10
+
+
 @dataclass(frozen=True)
 class Options:
     """The checked arguments of :func:`gausspp.simulate` (see there)."""

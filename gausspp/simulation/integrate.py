@@ -10,6 +10,7 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
+from scipy.integrate._ivp.rk import RungeKutta
 
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError
 from ..model.model import Model
@@ -21,7 +22,7 @@ from .drift import Stabilization
 from .initial import Projection, projection
 from .inputs import Options
 from .progress import Progress
-from .rhs import AnyRightHandSide
+from .rhs import AnyRightHandSide, step_control_atol
 from .samples import Samples
 
 
@@ -107,7 +108,7 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
     (:mod:`gausspp.simulation.crossing`): the solver starts again on the far side."""
     meth, t0, model = opts.method, opts.t0, rhs.model
     redundant = not rhs.margin_checked  # the general QP's rows dependent at the start
-    options: dict[str, Any] = {"rtol": opts.rtol, "atol": opts.atol}
+    options: dict[str, Any] = {"rtol": opts.rtol, "atol": step_control_atol(opts.atol, y0.size)}
     if opts.dt is not None:
         options.update(first_step=opts.dt, max_step=opts.dt)
     if meth.name in ("Radau", "BDF"):  # implicit methods: the exact Jacobian from casadi where it exists
@@ -155,13 +156,13 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
         if watch is None or solver.t >= opts.t_end:
             continue
         try:
-            plan = watch.observe(solver.t, solver.y, solver.dense_output)
+            plan = watch.observe(solver.t, solver.y, lambda s=solver: rate(rhs, s))
             if isinstance(plan, crossing.Approach):  # step to the point the bridge starts from
-                solver = Solver(rhs, solver.t, solver.y, plan.t, **options)
+                solver.retarget(plan.t)
                 continue
             if not isinstance(plan, crossing.Cross):
                 if solver.status == "finished":  # an approach point was reached, the bridge not needed: go on
-                    solver = Solver(rhs, solver.t, solver.y, opts.t_end, **options)
+                    solver.retarget(opts.t_end)
                 continue
             over = crossing.bridge(rhs, model, projection(model, redundant), solver.t, solver.y, plan.t, opts.t_end)
         except GaussppError as exc:
@@ -182,6 +183,12 @@ def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
     if watch is not None:
         events = sorted([*events, *watch.stepped], key=lambda e: e["t"])
     return Samples(np.array(ts), y, steps, rhs.evaluations, failure, meth.name, rhs.solver, events=tuple(events))
+
+
+def rate(rhs: AnyRightHandSide, solver: Any) -> np.ndarray:
+    """``ẏ`` at the solver's state: the explicit Runge–Kutta methods keep it (``f``, their next first stage)."""
+    f = getattr(solver, "f", None)
+    return f if isinstance(solver, RungeKutta) and f is not None else rhs(solver.t, solver.y)
 
 
 def jacobian(rhs: AnyRightHandSide) -> Any:

@@ -6,6 +6,7 @@ the full diagnosis of :mod:`gausspp.step.outcome` only when something is wrong.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -22,6 +23,23 @@ from ..step.outcome import QP_TOLERANCE, Where, evaluation_failed, step_margin, 
 from ..step.realizability import stacked_margins
 from ..workspace import workspace
 from .drift import Stabilization
+
+#: How many work integrals close the state ``y``: ``W_R`` and ``W_F``, the energy audit's quadratures.
+AUDIT_CHANNELS = 2
+
+
+def step_control_atol(atol: float, n: int) -> np.ndarray:
+    """The absolute tolerance of an adaptive run over the state ``y`` of size ``n``: ``atol`` on ``(q, v, λ)``,
+    ``inf`` on the work integrals ``W_R, W_F``.
+
+    The work integrals are quadratures: they feed nothing back into the motion, so their error estimate must not
+    choose the step (as SUNDIALS' CVODES leaves quadratures out of its error test by default, ``errconQ``). An
+    ideal constraint's power is round-off, and its integral's "error" at ``atol = 1e-12`` set the step size of
+    every ideal run — 116 DOP853 steps on the pendulum where the motion needs 33. They are integrated by the same
+    steps, with the method's order, and the energy audit checks them."""
+    tol = np.full(n, float(atol))
+    tol[n - AUDIT_CHANNELS :] = np.inf
+    return tol
 
 
 class _StateDerivative:
@@ -64,7 +82,26 @@ class RightHandSide(_StateDerivative):
         """The realizability margin of the last evaluation if it was at ``(t, y)`` (an integrator's accepted state
         is its last stage), else ``None``."""
         last = self.last_margin
-        return last[2] if last is not None and last[0] == t and np.array_equal(last[1], y) else None
+        if last is None or last[0] != t:
+            return None
+        return last[2] if last[1] is y or np.array_equal(last[1], y) else None
+
+    def margin(self, t: float, y: np.ndarray) -> float:
+        """The realizability margin at ``(t, y)`` by one compiled step call, unchecked (NaN where the step fails):
+        for a watch that probes states the integrator does not keep."""
+        if not isinstance(self.kernel, CompiledKernel):
+            return float("nan")
+        sq, sv, sl = self._slices
+        inputs = self.kernel.inputs
+        inputs[0][0] = t
+        inputs[1][:], inputs[2][:], inputs[3][:] = y[sq], y[sv], y[sl]
+        inputs[4][:] = 0.0
+        try:
+            self.kernel.evaluate()
+        except RuntimeError:
+            return float("nan")
+        out = self.kernel.result()
+        return step_margin(out["S_norm"], self.model.k, self.model.m) if out["pivot"][0] > 0 else float("nan")
 
     def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
         """Evaluate the step at ``(t, y)``; raise a project error if it fails."""
@@ -131,26 +168,34 @@ class RightHandSide(_StateDerivative):
         return out, margin, good
 
 
-#: Samples per call of the mapped step (one mapped function per kernel, whatever the number of samples).
+#: Samples per call of the mapped step, and per call for a run's last samples (fewer than :data:`CHUNK`): a run of
+#: 41 samples evaluates 48, not 128 — padding a short run to a whole chunk tripled its recording's QP solves.
 CHUNK = 128
+TAIL_CHUNK = 16
 
 
 #: Where the normalized ``S`` is among the step's outputs: the recording's mapped steps store it by its nonzeros.
 S_OUTPUT = OUTPUTS.index("S_norm")
 
+#: A mapped step by its number of samples per call (:data:`CHUNK` or :data:`TAIL_CHUNK`).
+Mapped = Callable[[int], Bound]
 
-def _mapped_step(model: Model, kernel: CompiledKernel, solver: str) -> Bound:
-    """The step mapped over :data:`CHUNK` samples (kept beside the kernel, and on disk for a direct step), its
+
+def _mapped_step(model: Model, kernel: CompiledKernel, solver: str) -> Mapped:
+    """The step mapped over ``chunk`` samples (kept beside the kernel, and on disk for a direct step), its
     ``S_norm`` stored by its nonzeros (:func:`~gausspp.step.bound.sparse_output`)."""
 
-    def build() -> Bound:
-        if kernel.qp_parts is not None:
-            return Bound(kernel.function.map(CHUNK))
-        fn = kernel.function
-        what = ("mapped step", CHUNK, solver, fn.name(), fn.n_instructions(), "sparse S")
-        return Bound(cached_function(model, what, lambda: sparse_output(fn, S_OUTPUT).map(CHUNK)))
+    def mapped(chunk: int) -> Bound:
+        def build() -> Bound:
+            if kernel.qp_parts is not None:
+                return Bound(kernel.function.map(chunk))
+            fn = kernel.function
+            what = ("mapped step", chunk, solver, fn.name(), fn.n_instructions(), "sparse S")
+            return Bound(cached_function(model, what, lambda: sparse_output(fn, S_OUTPUT).map(chunk)))
 
-    return workspace(kernel).get(("mapped step", CHUNK), build)
+        return workspace(kernel).get(("mapped step", chunk), build)
+
+    return mapped
 
 
 def _replayed(
@@ -165,9 +210,12 @@ def _replayed(
     """:func:`_mapped` with the samples where ``replay`` holds replayed from their QP ``solutions``."""
     assert kernel.qp_parts is not None
     parts = kernel.qp_parts
-    replayed = workspace(kernel).get(
-        ("replayed step", CHUNK), lambda: Bound(sparse_output(parts.replay(), S_OUTPUT).map(CHUNK))
-    )
+
+    def replayed(chunk: int) -> Bound:
+        return workspace(kernel).get(
+            ("replayed step", chunk), lambda: Bound(sparse_output(parts.replay(), S_OUTPUT).map(chunk))
+        )
+
     again = np.flatnonzero(~replay)
     out = _mapped(replayed, t[replay], y[replay], slices, solutions[replay])[0]  # SX: never refuses
     if again.size == 0:
@@ -180,22 +228,27 @@ def _replayed(
 
 
 def _mapped(
-    mapped: Bound,
+    mapped_over: Mapped,
     t: np.ndarray,
     y: np.ndarray,
     slices: tuple[slice, slice, slice],
     extra: np.ndarray | None = None,
 ) -> tuple[dict[str, np.ndarray], int]:
-    """A mapped step's outputs at the samples, :data:`CHUNK` at a time (the last chunk padded with the last sample);
-    how many were evaluated (fewer if casadi refused a chunk: the samples from it on are left out). ``extra``: one
-    more input per sample (a row each)."""
+    """A mapped step's outputs at the samples, :data:`CHUNK` at a time and the rest :data:`TAIL_CHUNK` at a time
+    (the last call padded with the last sample); how many were evaluated (fewer if casadi refused a call: the
+    samples from it on are left out). ``extra``: one more input per sample (a row each)."""
     n = t.size
-    out = {name: np.zeros((n, rows, cols // CHUNK)) for name, (rows, cols) in zip(OUTPUTS, mapped.shapes, strict=True)}
-    places = [_places(mapped.fn.sparsity_out(i)) for i in range(len(OUTPUTS))]
-    args, (sq, sv, sl) = mapped.args, slices  # the inputs column-major: sample after sample
-    args[4][:] = 0.0
-    for start in range(0, n, CHUNK):
-        stop, rows = min(start + CHUNK, n), np.minimum(np.arange(start, start + CHUNK), n - 1)
+    first = mapped_over(CHUNK if n >= CHUNK else TAIL_CHUNK)
+    chunk = _chunk(first)
+    out = {name: np.zeros((n, rows, cols // chunk)) for name, (rows, cols) in zip(OUTPUTS, first.shapes, strict=True)}
+    start = 0
+    while start < n:
+        mapped = mapped_over(CHUNK if n - start >= CHUNK else TAIL_CHUNK)
+        chunk = _chunk(mapped)
+        places = _places_of(mapped)
+        args, (sq, sv, sl) = mapped.args, slices  # the inputs column-major: sample after sample
+        args[4][:] = 0.0
+        stop, rows = min(start + chunk, n), np.minimum(np.arange(start, start + chunk), n - 1)
         args[0][:], args[1][:], args[2][:], args[3][:] = (
             t[rows],
             y[rows, sq].ravel(),
@@ -210,21 +263,34 @@ def _mapped(
             return out, start
         for name, res, shape, place in zip(OUTPUTS, mapped.res, mapped.shapes, places, strict=True):
             if place is None:
-                out[name][start:stop] = _stacked(res, shape, CHUNK)[: stop - start]
+                out[name][start:stop] = _stacked(res, shape, chunk)[: stop - start]
             else:  # stored by its nonzeros: each sample's into its (row, column)
                 sample, row, col = place
                 keep = sample < stop - start
                 out[name][start + sample[keep], row[keep], col[keep]] = res[keep]
+        start = stop
     return out, n
 
 
-def _places(sparsity: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+def _chunk(mapped: Bound) -> int:
+    """How many samples one call of ``mapped`` evaluates (its time input holds one per sample)."""
+    return int(mapped.fn.size1_in(0) * mapped.fn.size2_in(0))
+
+
+def _places_of(mapped: Bound) -> list[tuple[np.ndarray, np.ndarray, np.ndarray] | None]:
+    """:func:`_places` of each output of ``mapped`` (computed once per mapped function)."""
+    return workspace(mapped).get(
+        ("places",), lambda: [_places(mapped.fn.sparsity_out(i), _chunk(mapped)) for i in range(len(OUTPUTS))]
+    )
+
+
+def _places(sparsity: Any, chunk: int) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     """Where each stored entry of a mapped output goes: ``(sample, row, column)`` of its nonzeros (the samples'
     blocks side by side, as :func:`_stacked`); ``None`` for a dense output."""
     if sparsity.is_dense():
         return None
     rows, cols = (np.asarray(x, int) for x in sparsity.get_triplet())
-    width = sparsity.size2() // CHUNK
+    width = sparsity.size2() // chunk
     return cols // width, rows, cols % width
 
 
@@ -257,6 +323,23 @@ class GeneralRightHandSide(_StateDerivative):
         self._lam_cols = np.array(model.lam_columns, dtype=int)
         #: Whether the realizability margin says anything (not for redundant rows, where it is 0 by design).
         self.margin_checked = margin_checked
+
+    def margin(self, t: float, y: np.ndarray) -> float:
+        """The realizability margin at ``(t, y)`` by one compiled step call, unchecked (NaN where the step fails):
+        for a watch that probes states the integrator does not keep."""
+        if not isinstance(self.kernel, CompiledKernel):
+            return float("nan")
+        sq, sv, sl = self._slices
+        inputs = self.kernel.inputs
+        inputs[0][0] = t
+        inputs[1][:], inputs[2][:], inputs[3][:] = y[sq], y[sv], y[sl]
+        inputs[4][:] = 0.0
+        try:
+            self.kernel.evaluate()
+        except RuntimeError:
+            return float("nan")
+        out = self.kernel.result()
+        return step_margin(out["S_norm"], self.model.k, self.model.m) if out["pivot"][0] > 0 else float("nan")
 
     def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
         """Evaluate the step at ``(t, y)``; raise a project error if it fails."""

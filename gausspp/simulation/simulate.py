@@ -28,7 +28,7 @@ from .drift import Baumgarte, Stabilization, as_stabilization
 from .events import run_contacts
 from .general_cvodes import run_general_cvodes
 from .initial import check_on_constraint, initial_state, project_initial, redundant_rows
-from .inputs import Options, check_options
+from .inputs import DEFAULT_ATOL, DEFAULT_RTOL, Options, check_options
 from .integrate import run_python, run_scipy
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
@@ -48,8 +48,8 @@ def simulate(
     solver: str = "qp",
     backend: str | None = None,
     stabilize: str | Baumgarte | list[Any] | None = None,
-    rtol: float = 1e-9,
-    atol: float = 1e-12,
+    rtol: float = DEFAULT_RTOL,
+    atol: float = DEFAULT_ATOL,
     record: int | Any = 1,
     constraint_tol: float = 1e-8,
     throw: bool = True,
@@ -84,7 +84,9 @@ def simulate(
     stabilize : None, "baumgarte", "project", Baumgarte, or a list of these
         Drift control (off by default).
     rtol, atol : float
-        Tolerances of adaptive methods.
+        Tolerances of adaptive methods (default 1e-10 each): a step's error estimate on ``q``, ``v``, ``λ`` within
+        ``atol + rtol·|y|``; the works ``W_R``, ``W_F`` are integrated by the same steps and do not choose them.
+        Lower ``atol`` for a state whose scale is far below 1.
     record : int or array
         Record every ``record``-th step (fixed-step methods; every accepted step for adaptive
         ones), or at the given times (must lie on the grid for fixed-step methods).
