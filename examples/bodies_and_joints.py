@@ -14,6 +14,9 @@ angle and rate).
   (Grübler counts −6 degrees of freedom; it moves with one).
 * **Bricard's mechanism** (IFToMM A04): five rods along the edges of a cube and six hinges — Grübler counts no
   freedom, the hinges' special directions leave one; released from rest, it falls through it.
+* **Watt's flyball governor**: a spindle turned at a prescribed speed (a servo-constraint, kept by the drive's
+  torque), arms, links and a sleeve — 41 rows of rank 35; the arms rise and fall about the angle where the
+  effective potential ``V − ½ Ω² I_zz(α)`` is stationary.
 
 The first three are checked against a one-degree-of-freedom model of the same machine (the tests); Bricard's
 against MuJoCo's simulation of the same machine in joint coordinates. The figure: the three machines' energy
@@ -78,6 +81,31 @@ def spatial_double_parallelogram(l: float = 1.0, m: float = 1.0) -> gp.Multibody
     bar("coupler", 2 * l, 2 * m, (l, l, 0.0), 0.0)
     for j in range(3):
         mb.revolute(f"crank{j + 1}-coupler", f"crank{j + 1}", (l / 2, 0, 0), "coupler", ((j - 1) * l, 0, 0), axis=z)
+    return mb
+
+
+def flyball_governor(alpha: float, omega: float, l: float = 1.0, h: float = 1.0) -> gp.Multibody:
+    """Watt's flyball governor: a spindle turned at ``omega`` (a servo-constraint on its spin, realized by the
+    drive's torque), two arms of ``l`` (1 kg) hinged at its top, ``alpha`` from the vertical, and two links of
+    ``l/2`` (0.5 kg) from the arms' middles to a sleeve (0.5 kg) sliding on the spindle: 41 rows of rank 35."""
+    mb = gp.Multibody(gravity=(0.0, 0.0, -G))
+    mb.body("spindle", mass=1.0, inertia=(1 / 12, 1 / 12, 1e-2), at=(0, 0, h / 2))
+    mb.revolute("ground-spindle", "spindle", (0, 0, -h / 2), None, (0, 0, 0), axis=(0, 0, 1))
+    zs = h - l * np.cos(alpha)
+    mb.body("sleeve", mass=0.5, inertia=(1e-2, 1e-2, 1e-2), at=(0, 0, zs))
+    mb.prismatic("sleeve-spindle", "sleeve", (0, 0, 0), "spindle", (0, 0, zs - h / 2), axis=(0, 0, 1))
+    for side, s in (("1", 1.0), ("2", -1.0)):  # rods along their body x, turned about y into the plane x-z
+        for name, m, length, centre, turn in (
+            ("arm", 1.0, l, (s * l / 2 * np.sin(alpha), 0, h - l / 2 * np.cos(alpha)), s * np.sin(alpha)),
+            ("link", 0.5, l / 2, (s * l / 4 * np.sin(alpha), 0, h - 0.75 * l * np.cos(alpha)), -s * np.sin(alpha)),
+        ):
+            psi = np.arctan2(np.cos(alpha), turn)  # body x → (cos ψ, 0, −sin ψ): down the rod
+            rod = (m * 1e-4, m * length**2 / 12, m * length**2 / 12)
+            mb.body(name + side, mass=m, inertia=rod, at=centre, orientation=(np.cos(psi / 2), 0, np.sin(psi / 2), 0))
+        mb.revolute("spindle-arm" + side, "arm" + side, (-l / 2, 0, 0), "spindle", (0, 0, h / 2), axis=(0, 1, 0))
+        mb.revolute("arm-link" + side, "arm" + side, (0, 0, 0), "link" + side, (-l / 4, 0, 0), axis=(0, 1, 0))
+        mb.revolute("link-sleeve" + side, "link" + side, (l / 4, 0, 0), "sleeve", (0, 0, 0), axis=(0, 1, 0))
+    mb.spin("drive", "spindle", (0, 0, 1), lambda t: omega, realization=gp.Ideal())  # a torque about the axis
     return mb
 
 
@@ -195,6 +223,13 @@ def main() -> None:
     q0, v0 = br.assemble()
     runs["Bricard"] = cube = gp.simulate(model, q0, v0, 5.0, record=np.linspace(0, 5, 201))
     print(f"Bricard: {model.k} rows on {model.nv} velocities; link 1 swings {np.ptp(cube.q[:, 2]):.2f} m in z")
+    gov = flyball_governor(0.98, 7.0)  # 0.05 rad above the steady angle at 7 rad/s
+    q0, v0 = gov.assemble(rates={"spindle.ωz": 7.0, "arm1.ωy": 0.0})
+    turn = gp.simulate(gov.model(), q0, v0, 2.0, record=np.linspace(0, 2, 81))
+    i = gov.coordinate_names.index("arm1.x")
+    alpha = np.arctan2(np.hypot(turn.q[:, i], turn.q[:, i + 1]), 1.0 - turn.q[:, i + 2])
+    print(f"flyball governor: {gov.model().k} rows on {gov.model().nv} velocities; the arms swing between "
+          f"{alpha.min():.3f} and {alpha.max():.3f} rad about the steady 0.926")  # fmt: skip
     for name, run in runs.items():
         print(f"  {name}: energy constant to {np.ptp(run.energy) / np.abs(run.energy).max():.1e} (relative)")
     if len(sys.argv) > 1:

@@ -268,3 +268,31 @@ def test_recorded_refusals_give_the_minimal_acceleration(
     a_min = family.minimal.step(t, np.array(q), np.array(v), solver="direct").a
     a = qp_step(family.redundant, t, np.array(q), np.array(v), backend).a
     assert deviation(a, a_min) <= allowed(1e-9)
+
+
+# -- which rows are kept when the rows kept in order turn dependent while others take over ----------------------
+def _turning(theta: float) -> np.ndarray:
+    """Four rows in ℝ³ of rank 3 at every θ: e_z; (cos θ, sin θ, 0) taken twice (a loop's out-of-plane row, as two
+    joints write it); e_x, dropped when θ = 0. At θ → π/2 the second row turns dependent on the first three kept in
+    order, and e_x takes over."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.array([[0.0, 0.0, 1.0], [0.0, 1.0, 0.0], [c, s, 0.0], [1.0, 0.0, 0.0]])
+
+
+def test_the_pivoted_choice_keeps_the_well_conditioned_rows() -> None:
+    from gausspp.step.general.redundancy import chosen_rows, independent_rows, pivoted_rows, sines_of
+
+    rows = _turning(np.pi / 2 - 1e-4)  # in order: rows 0, 1, 2 kept, the third only 1e-4 off the second
+    kept, sines = independent_rows(rows)
+    assert kept.tolist() == [0, 1, 2] and sines[2] < 2e-4
+    alt, alt_sines = pivoted_rows(rows)
+    assert alt.size == 3 and alt_sines[alt].min() > 0.5 and 3 in alt.tolist()
+    np.testing.assert_allclose(sines_of(rows, alt), alt_sines)
+    assert alt_sines[np.setdiff1d(np.arange(4), alt)].max() < 1e-12  # the dropped row lies in their span
+    assert chosen_rows(rows)[0].tolist() == alt.tolist()  # ill-conditioned in order: the pivoted choice
+    assert chosen_rows(_turning(0.3))[0].tolist() == [0, 1, 2]  # clearly independent in order: the declared order
+    # negative control: near a rank drop (no row to take over) no choice is better, and the declared order holds
+    near_drop = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 1.0, 1e-4]])
+    kept_in_order, in_order = independent_rows(near_drop)
+    assert kept_in_order.size == 3 and in_order.min() < 2e-4
+    assert chosen_rows(near_drop)[0].tolist() == kept_in_order.tolist()

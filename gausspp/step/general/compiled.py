@@ -66,6 +66,12 @@ REALIZABLE_PIVOT = 1e-6
 #: decision of an open piece of the manifold holds through an isolated singular position (a parallelogram's
 #: collinear one), where only the instantaneous rank drops; the step there stays on the branch of the motion.
 KEPT_FLOOR = 0.0
+#: A pattern decided where its kept rows were clearly independent (smallest sine ≥
+#: :data:`~.redundancy.CLEARLY_INDEPENDENT`) hands the state back to the Python route once that sine falls below
+#: this: the rows turning dependent while others take over (a spatial loop turning), the Python route chooses
+#: anew (:func:`~.redundancy.chosen_rows`). A pattern decided with smaller sines (near a singular position, where
+#: no choice does better) keeps :data:`KEPT_FLOOR`.
+HOLD_FLOOR = 5e-3
 #: Below this smallest pivot of ``S H⁻¹ Sᵀ`` (unit-free) the equality step is damped in proportion to the state's
 #: drift from the manifold (:func:`_equality_qp`).
 SINGULAR_BAND = 1e-6
@@ -82,6 +88,7 @@ class Pattern:
     kept_rows: tuple[int, ...]  # kept bilateral rows (of the model's k rows)
     kept_cols: tuple[int, ...]  # kept reaction unknowns (of the m + len(closed) unknowns)
     given: bool  # the caller names the closed contacts (no check against the gaps)
+    floor: float = 0.0  # the kept rows' smallest sine below which the flag is down (:data:`HOLD_FLOOR` or 0)
 
     def compilable(self, model: StepModel) -> bool:
         """Dropped columns carry the least-norm share in closed form: only where no bound acts."""
@@ -233,7 +240,7 @@ class _Graph:
         if K:
             G = Jn[K, :] @ Jn[K, :].T
             Rk = ca.chol(G)
-            checks.append(ca.mmin(ca.diag(Rk)) >= KEPT_FLOOR)
+            checks.append(ca.mmin(ca.diag(Rk)) >= max(KEPT_FLOOR, pat.floor))
             B = ca.solve(Rk.T, Jn[K, :])  # orthonormal rows spanning the kept rows, in their order
             # as kept_rows.kept_rows judges a gap: nearly dependent kept rows (near a singular position, where the
             # decision of the open piece holds) amplify drift and round-off in what the dropped rows are tested on
@@ -375,7 +382,7 @@ class GeneralCall:
         self.sparse = sparse_pattern.applies(model, pat.kept_rows, pat.kept_cols, pat.closed)
         self.sizes = self._sizes(model, pat)
         if self.sparse:
-            outs = sparse_pattern.sparse_step(model, pat.kept_rows, consistency_tol, SINGULAR_BAND)
+            outs = sparse_pattern.sparse_step(model, pat.kept_rows, consistency_tol, max(SINGULAR_BAND, pat.floor**2))
             fn = ca.Function("general_step_sparse", model.inputs, [ca.cse(o) for o in outs])
         else:
             fn = self._function(model, pat, backend, consistency_tol)

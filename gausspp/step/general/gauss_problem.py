@@ -85,6 +85,7 @@ class GaussSolution:
     kept_rows : the bilateral rows kept (the others dependent on them), as decided
     kept_cols : the reaction unknowns whose columns of ``W = L⁻¹D`` are independent (in order), as decided
     isolated_rank_drop : rows kept on the open piece of the manifold were dropped at this isolated singular position
+    kept_sine : the kept rows' smallest sine against the rows kept before them, where they were decided
     """
 
     a: np.ndarray
@@ -99,6 +100,7 @@ class GaussSolution:
     kept_rows: tuple[int, ...] = ()
     kept_cols: tuple[int, ...] = ()
     isolated_rank_drop: bool = False
+    kept_sine: float = 1.0
 
     @classmethod
     def of_fields(cls, fields: dict[str, object]) -> GaussSolution:

@@ -20,9 +20,10 @@ from ..protocol import StepModel
 from ..qp.casadi_conic import CasadiConic
 from ..realizability import margin_of, normalized_cosines
 from ..results import StepResult
-from .compiled import GeneralCall, Pattern
+from .compiled import HOLD_FLOOR, GeneralCall, Pattern
 from .manifold import on_manifold, reference_problem
 from .model_qp import closed_rows, gauss_problem
+from .redundancy import CLEARLY_INDEPENDENT
 from .solve import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, resolve_backend, solve_general
 
 
@@ -121,7 +122,8 @@ def _remember(
     chosen = _backend(model, backend)
     if not isinstance(chosen, CasadiConic):
         return
-    pat = Pattern(tuple(int(i) for i in closed_rows_now), sol.kept_rows, sol.kept_cols, closed is not None)
+    floor = HOLD_FLOOR if sol.kept_sine >= CLEARLY_INDEPENDENT else 0.0
+    pat = Pattern(tuple(int(i) for i in closed_rows_now), sol.kept_rows, sol.kept_cols, closed is not None, floor)
     if not pat.compilable(model):
         return
     call = workspace(model).get(("general call", chosen.name, pat, tol), lambda: GeneralCall(model, pat, chosen, tol))

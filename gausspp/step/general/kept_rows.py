@@ -19,7 +19,7 @@ import numpy as np
 from ...errors import RealizabilityError
 from .. import dense
 from .gauss_problem import GaussProblem, at, row_kinds, row_names
-from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL, independent_rows
+from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL, chosen_rows, independent_rows, sines_of
 from .scaling import Scaled, rank_of, scaled
 
 #: A dropped row at the angle ``s`` from the kept rows' span may miss their right-hand sides by this many ``s‖y‖``.
@@ -37,11 +37,12 @@ class Rows:
     kept: np.ndarray
     redundant: int
     isolated: bool = False  # rows kept on the open piece were dropped at an isolated singular position
+    sine: float = 1.0  # the kept rows' smallest sine against those before them, at the reference
 
 
-def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarray]:
-    """The bilateral rows kept (:func:`~gausspp.step.redundancy.independent_rows` at ``ref``), how far the
-    dropped ones contradict the kept ones there, and each row's sine against the rows kept before it.
+def kept_rows(ref: Scaled, eq: np.ndarray, keep: np.ndarray | None = None) -> tuple[np.ndarray, float, np.ndarray]:
+    """The bilateral rows kept (:func:`~gausspp.step.redundancy.chosen_rows` at ``ref``, or the rows ``keep``), how
+    far the dropped ones contradict the kept ones there, and each row's sine against the rows kept before it.
 
     The contradiction of a dropped row ``d = cᵀ K + s n`` (``s`` its sine against the kept rows ``K``) is what its
     right-hand side misses, less the ``s ‖y‖`` its own angle explains (``y`` the whitened reaction), relative to
@@ -51,7 +52,11 @@ def kept_rows(ref: Scaled, eq: np.ndarray) -> tuple[np.ndarray, float, np.ndarra
     linkage passing a singular position on its branch; of order one for rows that describe different constraints.
     """
     eq_rows = np.flatnonzero(eq)
-    kept_local, sines = independent_rows(ref.Jn[eq_rows])
+    if keep is None:
+        kept_local, sines = chosen_rows(ref.Jn[eq_rows])
+    else:
+        kept_local = np.flatnonzero(np.isin(eq_rows, keep))
+        sines = sines_of(ref.Jn[eq_rows], kept_local)
     kept = eq_rows[kept_local]
     gap = 0.0
     if kept.size < eq_rows.size:
@@ -148,9 +153,32 @@ def decide_rows(
         if on_manifold is not None:
             ref = scaled(on_manifold)
             kept, gap, sines = kept_rows(ref, eq)
+    kept, gap, sines = _hold(ref, eq, kept, gap, sines, kept_before)
     check_realizable(p, ref, eq | track)
     dropped = set(np.flatnonzero(eq).tolist()) - set(kept.tolist())
-    isolated = kept_before is not None and bool(dropped & set(kept_before))  # a row independent before
+    # a row independent before, dropped by the declared order here (not a choice of other rows, well conditioned,
+    # of the same rank: chosen_rows's pivoted choice or the rows held)
+    in_order = np.flatnonzero(eq)[independent_rows(ref.Jn[eq])[0]]
+    deliberate = kept.size == len(kept_before or ()) and not np.array_equal(kept, in_order)
+    isolated = kept_before is not None and bool(dropped & set(kept_before)) and not deliberate
     if gap > consistency_tol and not isolated:
         raise _contradiction(p, eq, gap)
-    return Rows(ref, kept, int(eq.sum()) - kept.size, isolated and gap > consistency_tol)
+    sine = float(sines[kept].min()) if kept.size else 1.0
+    return Rows(ref, kept, int(eq.sum()) - kept.size, isolated and gap > consistency_tol, sine)
+
+
+def _hold(
+    ref: Scaled, eq: np.ndarray, kept: np.ndarray, gap: float, sines: np.ndarray, before: tuple[int, ...] | None
+) -> tuple[np.ndarray, float, np.ndarray]:
+    """The rows kept before, where they are as many as a choice now and still clearly independent: a choice is
+    changed only when it turns ill-conditioned (near the crossover of two choices, choosing anew at every state
+    would switch back and forth)."""
+    if before is None or len(before) != kept.size or set(before) == set(kept.tolist()):
+        return kept, gap, sines
+    held = np.array(sorted(before), dtype=int)
+    if not np.all(eq[held]):
+        return kept, gap, sines
+    h_kept, h_gap, h_sines = kept_rows(ref, eq, keep=held)
+    if h_kept.size == kept.size and h_sines[h_kept].min() >= CLEARLY_INDEPENDENT:
+        return h_kept, h_gap, h_sines
+    return kept, gap, sines

@@ -54,9 +54,9 @@ import numpy as np
 
 from .. import dense, qp
 from ..qp import QP, QPBackend
-from .gauss_problem import GaussProblem, GaussSolution, at, row_kinds
+from .gauss_problem import GaussProblem, GaussSolution, RowKinds, at, row_kinds
 from .kept_rows import NearManifold, Reference, decide_rows
-from .redundancy import DEPENDENCE_TOL, independent_rows
+from .redundancy import DEPENDENCE_TOL, chosen_rows
 from .scaling import RANGE_TOL, RANK_TOL, Scaled, compress, range_basis, rank_of, scaled, svd_rank, truncated_pinv
 from .stage import DUAL_TOL, FEASIBILITY_TOL, solve_stage
 
@@ -167,11 +167,20 @@ class _Setup:
             bounded,
             Ws,
             rank_of(sv, DEPENDENCE_TOL),
-            independent_rows((ref.W / ref.cs).T, DEPENDENCE_TOL)[0],
+            _kept_cols(p, ref, kept, kinds),
             Q,
             backend,
             at(p.t),
         )
+
+
+def _kept_cols(p: GaussProblem, ref: Scaled, kept: np.ndarray, kinds: RowKinds) -> np.ndarray:
+    """The reaction columns kept: those of the kept rows where the reactions are the rows themselves (``D = Jᵀ``,
+    every row an equality: the columns of ``W`` are the whitened rows, and the rows' choice, held or pivoted, is
+    theirs); otherwise the columns independent of those before them (:func:`~.redundancy.chosen_rows`)."""
+    if kinds.eq.all() and p.D.shape == p.J.T.shape and np.array_equal(p.D, p.J.T):
+        return np.asarray(kept, dtype=int)
+    return chosen_rows((ref.W / ref.cs).T, DEPENDENCE_TOL)[0]
 
 
 def _compulsion(
@@ -331,5 +340,5 @@ def solve_general(
     stages: list[str] = []
     w, x, tracking_error = _reaction(setup, stages)
     u = _least_norm(setup, w, x, stages)
-    solution = _solution(setup, u, w, tracking_error, stages, rows.redundant)
+    solution = replace(_solution(setup, u, w, tracking_error, stages, rows.redundant), kept_sine=rows.sine)
     return replace(solution, isolated_rank_drop=True) if rows.isolated else solution

@@ -151,7 +151,11 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
         euclid = ca.fmax(ca.norm_2(j_rho), 1e-300)  # the combined row's length as a coordinate gradient
         v_size, q_size = 1 + ca.mmax(ca.fabs(mech.v)), 1 + ca.mmax(ca.fabs(mech.q))
         fit_v = (ca.dot(rho_u, p.Phi[D_rows]) - ca.dot(w, p.Phi[K])) / euclid
-        checks.append(ca.fabs(fit_v) <= REACH_TOL * v_size * ca.sum1(ca.fabs(rho)))
+        # rows with a term of their own (a servo's prescribed speed: Φ = J v − b) pass on the error of w, which the
+        # dropped rows' angle off the kept span makes (up to sine·length/smallest pivot of G), times b
+        own = ca.fabs(p.Phi[K] - J[K, :] @ mech.v) / norms[K]
+        noise = AGREEMENT_SLACK * sine * length * ca.sum1(own) / (ca.fmax(smallest, 1e-300) * euclid)
+        checks.append(ca.fabs(fit_v) <= REACH_TOL * v_size * ca.sum1(ca.fabs(rho)) + noise)
         hol = set(model.holonomic_rows)
         if p.g is not None and all(d in hol for d in D_rows) and all(i in hol for i in K):
             fit_g = (ca.dot(rho_u, p.g[D_rows]) - ca.dot(w, p.g[K])) / euclid
