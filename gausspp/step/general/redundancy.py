@@ -14,8 +14,10 @@ when it is on the manifold, else its projection, :meth:`gausspp.Model.general_st
 where the kept rows must also be consistent; the step is then solved at the actual state with
 the kept rows only. Rows are kept greedily **in the order the constraints were declared**: a row
 is dropped when, at the reference, it lies within :data:`DEPENDENCE_TOL` (sine of the angle, in
-the kinetic metric ``A⁻¹``) of the span of the rows kept before it. The answer is then exactly the
-motion of the minimal model made of the kept rows — at any drift, not only to within it.
+the kinetic metric ``A⁻¹``) of the span of the rows kept before it — unless the rows so kept turn
+nearly dependent while the rank of all rows holds, where a pivoted choice of as many rows is kept
+(:func:`chosen_rows`). The answer is then exactly the motion of the minimal model made of the kept
+rows — at any drift, not only to within it.
 """
 
 from __future__ import annotations
