@@ -67,7 +67,9 @@ class Body:
         if self.planar:
             th = c[2]
             return c[0:2], ca.vertcat(ca.horzcat(ca.cos(th), -ca.sin(th)), ca.horzcat(ca.sin(th), ca.cos(th)))
-        return c[0:3], quaternion_to_matrix(c[3:7])
+        p = c[3:7]
+        return c[0:3], quaternion_to_matrix(p / ca.norm_2(p))  # the rotation of p's direction: a joint's rows then
+        # read the rotation alone, also where an integrator's stage leaves |p| ≠ 1 (its norm is no joint's business)
 
     def point(self, q: Any, local: Any) -> Any:
         """The point fixed in the body at ``local`` (from the centre of mass, body axes), in space."""
