@@ -13,6 +13,10 @@ ideal holonomic constraints of two rows each (``2N`` rows in all):
     ``pin-1:  p₁⁻ = 0``   (the top of link 1 at the origin),
     ``pin-i:  pᵢ⁻ − pᵢ₋₁⁺ = 0``   (``i ≥ 2``).
 
+The chain is written as bodies and joints (``gp.Multibody``: a planar body per link, a revolute per pin,
+:func:`chain`); its model is, row for row, the one of the end-point expressions above (the test
+``tests/test_scenes_on_multibody.py`` keeps that hand-written model as the reference: the same motion to the
+last bit).
 Each pin's rows are written on the six coordinates of the two links it joins only, so the
 constraint Jacobian ``J`` (``2N × 3N``) is block bidiagonal in casadi's sparsity pattern and
 ``J A⁻¹ Jᵀ`` is banded: the structure a sparse step route can exploit.
@@ -33,9 +37,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError
-from ..model.constraints import Holonomic
-from ..model.mechanism import Lagrangian
-from ..model.model import Model
+from ..multibody import Multibody
 from . import pendulum
 from .scene import Scene, numbered
 
@@ -49,29 +51,16 @@ def end(q: Any, link: int, sign: int, L: float) -> Any:
     return ca.vertcat(x + sign * 0.5 * L * ca.cos(theta), z + sign * 0.5 * L * ca.sin(theta))
 
 
-def pin(name: str, first: tuple[int, int, float], to: tuple[int, int, float] | tuple[float, float]) -> Holonomic:
-    """Two rows pinning the end ``first = (bar, sign, length)`` (see :func:`end`) to ``to``: an end of another bar
-    or a point ``(x, z)`` of the ground. The rows read the coordinates of those bars only."""
-    if len(to) == 3:
-        return Holonomic(lambda q, t: end(q, *first) - end(q, *to), name=name)
-    point = ca.DM(to)
-    return Holonomic(lambda q, t: end(q, *first) - point, name=name)
-
-
-def bars(lengths: list[float], m: float, g: float) -> Lagrangian:
-    """Free bars in the plane, each of mass ``m`` and moment ``m lᵢ²/12``: ``T`` diagonal, ``V = Σ m g zᵢ``."""
-    inertias = [m * length * length / 12.0 for length in lengths]
-
-    def kinetic(q: Any, v: Any, t: Any) -> Any:
-        return sum(
-            0.5 * m * (v[3 * i] ** 2 + v[3 * i + 1] ** 2) + 0.5 * inertia * v[3 * i + 2] ** 2
-            for i, inertia in enumerate(inertias)
-        )
-
-    def potential(q: Any, t: Any) -> Any:
-        return sum(m * g * q[3 * i + 1] for i in range(len(lengths)))
-
-    return Lagrangian(n=3 * len(lengths), T=kinetic, V=potential)
+def chain(N: int, m: float, L: float, g: float) -> Multibody:
+    """The chain as bodies and joints: link ``i`` a bar of ``m`` and ``m L²/12`` along its body ``x``, pinned at its top
+    (``−L/2``) to the bottom (``+L/2``) of the link above, the first to the origin (``pin-1``, ``pin-2``, …)."""
+    mb = Multibody(gravity=(0.0, -g))  # the plane's second axis is the scene's z
+    for i in range(N):
+        mb.body(f"link{i + 1}", mass=m, inertia=m * L * L / 12.0, at=(0.0, 0.0), angle=0.0)
+    mb.revolute("pin-1", "link1", (-L / 2, 0.0), None, (0.0, 0.0))
+    for i in range(1, N):
+        mb.revolute(f"pin-{i + 1}", f"link{i + 1}", (-L / 2, 0.0), f"link{i}", (L / 2, 0.0))
+    return mb
 
 
 def straight(N: int, L: float, theta0: float) -> np.ndarray:
@@ -110,9 +99,7 @@ def build(
         raise InputError(f"planar-chain: N must be a positive integer, got N={N!r}; give N = 1, 2, …")
     if not (m > 0 and L > 0):
         raise InputError(f"planar-chain: m and L must be positive, got m={m}, L={L}")
-    pins = [pin("pin-1", (0, -1, L), (0.0, 0.0))]
-    pins += [pin(f"pin-{i + 1}", (i, -1, L), (i - 1, +1, L)) for i in range(1, N)]
-    model = Model(bars([L] * N, m, g), pins)
+    model = chain(N, m, L, g).model()
     exact = None
     if N == 1:  # the pendulum scene's reference: centre of mass at L/2 from the pin, Ic = m L²/12
         exact = pendulum.build(m=m, Ic=m * L * L / 12.0, L=0.5 * L, g=g, phi0=theta0, t_end=t_end).exact
@@ -177,7 +164,7 @@ def build_planar_ladder(
         raise InputError(
             f"planar-ladder: theta0={theta0} leaves the rails nearly level with the rungs; use |sin θ0| > 0.1"
         )
-    model = Model(bars([L, L, W] * N, m, g), [p for i in range(N) for p in ladder_pins(i, L, W)])
+    model = ladder(N, m, L, W, g).model()
     e = np.array([np.cos(theta0), np.sin(theta0)])
     q0 = np.empty(9 * N)
     for i in range(N):  # left rail, right rail, rung
@@ -197,15 +184,19 @@ def build_planar_ladder(
     )
 
 
-def ladder_pins(level: int, L: float, W: float) -> list[Holonomic]:
-    """A level's four pins: each rail's top to the rail above (the ground at ``(0, 0)`` and ``(W, 0)`` for the
-    first), the rung's ends to the rails' bottoms. Bars ``3i, 3i + 1, 3i + 2``: left rail, right rail, rung."""
-    left, right, rung = 3 * level, 3 * level + 1, 3 * level + 2
-    above: list[Any] = [(left - 3, +1, L), (right - 3, +1, L)] if level else [(0.0, 0.0), (W, 0.0)]
-    n = level + 1
-    return [
-        pin(f"left-{n}", (left, -1, L), above[0]),
-        pin(f"right-{n}", (right, -1, L), above[1]),
-        pin(f"rung-{n} left", (rung, -1, W), (left, +1, L)),
-        pin(f"rung-{n} right", (rung, +1, W), (right, +1, L)),
-    ]
+def ladder(N: int, m: float, L: float, W: float, g: float) -> Multibody:
+    """The ladder as bodies and joints. Level ``n``: a left and a right rail of ``L`` and a rung of ``W`` (bars along
+    their body ``x``); each rail's top pinned to the rail above (the ground at ``(0, 0)`` and ``(W, 0)`` for the
+    first), the rung's ends to the rails' bottoms (``left-n``, ``right-n``, ``rung-n left``, ``rung-n right``)."""
+    mb = Multibody(gravity=(0.0, -g))
+    for n in range(1, N + 1):
+        for name, length in (("left", L), ("right", L), ("rung", W)):
+            mb.body(f"{name}{n}", mass=m, inertia=m * length * length / 12.0, at=(0.0, 0.0), angle=0.0)
+        above = [(f"left{n - 1}", (L / 2, 0.0)), (f"right{n - 1}", (L / 2, 0.0))]
+        if n == 1:  # the ground
+            above = [(None, (0.0, 0.0)), (None, (W, 0.0))]
+        mb.revolute(f"left-{n}", f"left{n}", (-L / 2, 0.0), *above[0])
+        mb.revolute(f"right-{n}", f"right{n}", (-L / 2, 0.0), *above[1])
+        mb.revolute(f"rung-{n} left", f"rung{n}", (-W / 2, 0.0), f"left{n}", (L / 2, 0.0))
+        mb.revolute(f"rung-{n} right", f"rung{n}", (W / 2, 0.0), f"right{n}", (L / 2, 0.0))
+    return mb
