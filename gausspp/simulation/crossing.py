@@ -25,7 +25,11 @@ that is not ideal losing its margin is a different matter — the realization ca
 (:mod:`gausspp.simulation.margins`) — and is not crossed.
 
 Each crossing is an event of the trajectory: ``{"t": t*, "kind": "singular position", "from": t_a, "to": t_b,
-"correction": |Δq|∞ of the projection}``.
+"correction": |Δq|∞ of the projection}``. A singular position that one of the run's own steps went over (loose
+tolerances, long steps) is an event too, without ``"correction"``: ``σ_r`` fell and rose again and changed sign in
+between, which the singular vectors at the samples tell (:func:`sign_changed`); a dip of ``σ_r`` that stays above
+zero (the pendulum's pin) changes no sign, and the watch makes no approach where ``σ_r``'s trend flattens out
+(:data:`CONVEX`).
 """
 
 from __future__ import annotations
