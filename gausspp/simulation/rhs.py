@@ -86,16 +86,20 @@ class RightHandSide(_StateDerivative):
             return None
         return last[2] if last[1] is y or np.array_equal(last[1], y) else None
 
+    def _load(self, t: float, y: np.ndarray, stabilized: bool) -> None:
+        """The kernel's inputs from the state ``y = (q, v, λ, W_R, W_F)``."""
+        sq, sv, sl = self._slices
+        inputs = self.kernel.inputs
+        inputs[0][0] = t
+        inputs[1][:], inputs[2][:], inputs[3][:] = y[sq], y[sv], y[sl]
+        inputs[4][:] = self.stab if stabilized else 0.0
+
     def margin(self, t: float, y: np.ndarray) -> float:
         """The realizability margin at ``(t, y)`` by one compiled step call, unchecked (NaN where the step fails):
         for a watch that probes states the integrator does not keep."""
         if not isinstance(self.kernel, CompiledKernel):
             return float("nan")
-        sq, sv, sl = self._slices
-        inputs = self.kernel.inputs
-        inputs[0][0] = t
-        inputs[1][:], inputs[2][:], inputs[3][:] = y[sq], y[sv], y[sl]
-        inputs[4][:] = 0.0
+        self._load(t, y, stabilized=False)
         try:
             self.kernel.evaluate()
         except RuntimeError:
@@ -106,10 +110,7 @@ class RightHandSide(_StateDerivative):
     def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
         """Evaluate the step at ``(t, y)``; raise a project error if it fails."""
         sq, sv, sl = self._slices
-        inputs = self.kernel.inputs
-        inputs[0][0] = t
-        inputs[1][:], inputs[2][:], inputs[3][:] = y[sq], y[sv], y[sl]
-        inputs[4][:] = self.stab if stabilized else 0.0
+        self._load(t, y, stabilized)
         self.evaluations += 1
         try:
             self.kernel.evaluate()
@@ -323,23 +324,6 @@ class GeneralRightHandSide(_StateDerivative):
         self._lam_cols = np.array(model.lam_columns, dtype=int)
         #: Whether the realizability margin says anything (not for redundant rows, where it is 0 by design).
         self.margin_checked = margin_checked
-
-    def margin(self, t: float, y: np.ndarray) -> float:
-        """The realizability margin at ``(t, y)`` by one compiled step call, unchecked (NaN where the step fails):
-        for a watch that probes states the integrator does not keep."""
-        if not isinstance(self.kernel, CompiledKernel):
-            return float("nan")
-        sq, sv, sl = self._slices
-        inputs = self.kernel.inputs
-        inputs[0][0] = t
-        inputs[1][:], inputs[2][:], inputs[3][:] = y[sq], y[sv], y[sl]
-        inputs[4][:] = 0.0
-        try:
-            self.kernel.evaluate()
-        except RuntimeError:
-            return float("nan")
-        out = self.kernel.result()
-        return step_margin(out["S_norm"], self.model.k, self.model.m) if out["pivot"][0] > 0 else float("nan")
 
     def evaluate(self, t: float, y: np.ndarray, stabilized: bool = True) -> dict[str, np.ndarray]:
         """Evaluate the step at ``(t, y)``; raise a project error if it fails."""

@@ -25,6 +25,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy.linalg
 
 #: A row whose normalized residual against the rows kept before it (sine of the angle between the row
 #: and their span, in the metric A⁻¹) is below this, at the reference state, is dependent on them.
@@ -83,50 +84,43 @@ def independent_rows(rows: np.ndarray, tol: float = DEPENDENCE_TOL) -> tuple[np.
 
 
 def pivoted_rows(rows: np.ndarray, tol: float = DEPENDENCE_TOL) -> tuple[np.ndarray, np.ndarray]:
-    """The rows a pivoted choice keeps — at each step the row farthest from the span of those chosen (modified
-    Gram–Schmidt with row pivoting) until none is farther than ``tol`` — and their sines as :func:`independent_rows`
-    reports them: a kept row's against the kept rows before it (in index order), a dropped row's against all kept.
+    """The rows a pivoted choice keeps — at each step the row farthest from the span of those chosen (QR with column
+    pivoting of the unit rows' transpose, LAPACK's ``geqp3``) while it is farther than ``tol`` — and their sines as
+    :func:`sines_of` reports them.
 
     Greedy in order keeps a row as long as it is independent at all; where the kept rows drift towards dependence
     while rows dropped earlier take over (a spatial loop turning: its out-of-plane rows change from world ``y`` to
     ``x`` components), the pivoted choice keeps the well-conditioned set.
     """
-    rows = np.asarray(rows, dtype=float)
-    k, n = rows.shape
-    norms = np.linalg.norm(rows, axis=1)
-    rest = np.where(norms[:, None] > 0, rows / np.where(norms > 0, norms, 1.0)[:, None], 0.0)
-    chosen: list[int] = []
-    while len(chosen) < min(k, n):
-        size = np.linalg.norm(rest, axis=1)
-        size[chosen] = -1.0
-        i = int(np.argmax(size))
-        if size[i] <= tol:
-            break
-        chosen.append(i)
-        b = rest[i] / size[i]
-        rest = rest - np.outer(rest @ b, b)
-    kept = np.array(sorted(chosen), dtype=int)
+    unit = _unit(rows)
+    R, order = scipy.linalg.qr(unit.T, mode="r", pivoting=True)
+    distance = np.abs(np.diag(R))  # of each chosen row from the span of those chosen before it
+    kept = np.sort(order[: int(np.count_nonzero(distance > tol))])
     return kept, sines_of(rows, kept)
 
 
 def sines_of(rows: np.ndarray, kept: np.ndarray) -> np.ndarray:
-    """Each row's sine as :func:`pivoted_rows` reports it for the choice ``kept`` (increasing indices): a kept row's
-    against the kept rows before it, any other row's against all kept rows."""
-    rows = np.asarray(rows, dtype=float)
-    k = rows.shape[0]
-    norms = np.linalg.norm(rows, axis=1)
-    safe = np.where(norms > 0, norms, 1.0)
-    sines = np.zeros(k)
+    """Each row's sine for the choice ``kept`` (increasing indices): a kept row's against the kept rows before it
+    (as :func:`independent_rows` reports it), any other row's against all kept rows."""
+    unit = _unit(rows)
+    sines = np.zeros(unit.shape[0])
     if not kept.size:
         return sines
-    sines[kept] = independent_rows(rows[kept], tol=0.0)[1]
-    basis = np.linalg.qr((rows[kept] / safe[kept, None]).T)[0].T
-    others = np.setdiff1d(np.arange(k), kept)
-    unit = rows[others] / safe[others, None]
-    for _ in range(2):
-        unit = unit - (unit @ basis.T) @ basis
-    sines[others] = np.where(norms[others] > 0, np.linalg.norm(unit, axis=1), 0.0)
+    sines[kept] = independent_rows(unit[kept], tol=0.0)[1]
+    basis = np.linalg.qr(unit[kept].T)[0].T
+    others = np.setdiff1d(np.arange(unit.shape[0]), kept)
+    rest = unit[others]
+    for _ in range(2):  # twice: orthogonal to round-off
+        rest = rest - (rest @ basis.T) @ basis
+    sines[others] = np.linalg.norm(rest, axis=1)
     return sines
+
+
+def _unit(rows: np.ndarray) -> np.ndarray:
+    """The rows scaled to unit length (a zero row stays zero)."""
+    rows = np.asarray(rows, dtype=float)
+    norms = np.linalg.norm(rows, axis=1)
+    return rows / np.where(norms > 0, norms, 1.0)[:, None]
 
 
 def chosen_rows(rows: np.ndarray, tol: float = DEPENDENCE_TOL) -> tuple[np.ndarray, np.ndarray]:
@@ -138,9 +132,7 @@ def chosen_rows(rows: np.ndarray, tol: float = DEPENDENCE_TOL) -> tuple[np.ndarr
     choice does better and the declared order holds."""
     kept, sines = independent_rows(rows, tol)
     if kept.size > 1 and sines[kept].min() < CLEARLY_INDEPENDENT:
-        norms = np.linalg.norm(rows, axis=1)
-        unit = rows[norms > 0] / norms[norms > 0, None]
-        if np.linalg.svd(unit, compute_uv=False)[kept.size - 1] < RANK_HOLDS:
+        if np.linalg.svd(_unit(rows), compute_uv=False)[kept.size - 1] < RANK_HOLDS:
             return kept, sines  # the rows' rank itself is dropping (a singular position): no choice does better
         alt, alt_sines = pivoted_rows(rows, tol)
         if alt.size == kept.size and alt_sines[alt].min() >= max(SWAP_GAIN * sines[kept].min(), CLEARLY_INDEPENDENT):
