@@ -13,6 +13,7 @@ import sys
 from . import plot, scenes, servo
 from .errors import (
     DriftError,
+    DriftWarning,
     GaussppError,
     GaussppWarning,
     InitialDataError,
@@ -74,6 +75,7 @@ __all__ = [
     "GaussppError",
     "GaussppWarning",
     "DriftError",
+    "DriftWarning",
     "Holonomic",
     "Ideal",
     "Inertial",

@@ -108,6 +108,11 @@ class RealizabilityWarning(GaussppWarning):
     """The realizability margin is small: the reaction is large and ill-determined."""
 
 
+class DriftWarning(GaussppWarning):
+    """A run reached ``t_end``, but its residuals or its energy balance left the run's ``constraint_tol``
+    (status ``"drifted"``)."""
+
+
 class LongRunWarning(GaussppWarning):
     """A run asks for very many steps (an estimate is given up front, before the wait)."""
 

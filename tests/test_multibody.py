@@ -293,7 +293,9 @@ def test_the_flyball_governor_turns_as_its_one_coordinate_model(offset: float) -
     assert (model.k, model.nv) == (41, 36)
     q0, v0 = mb.assemble(rates={"spindle.ωz": omega, "arm1.ωy": 0.0})
     times = np.linspace(0.0, 2.0, 41)
-    traj = gp.simulate(model, q0, v0, 2.0, record=times, rtol=1e-12, atol=1e-12)
+    # the rows a near-tie keeps decide the dropped rows' drift: 2e-12 from a* to ten digits, 1.5e-8 from a* to full
+    # precision (measured) — the accuracy stated is the larger
+    traj = gp.simulate(model, q0, v0, 2.0, record=times, rtol=1e-12, atol=1e-12, constraint_tol=1e-7)
     assert traj.success
     i = mb.coordinate_names.index("arm1.x")
     x, y, z = traj.q[:, i], traj.q[:, i + 1], traj.q[:, i + 2]

@@ -590,7 +590,8 @@ def test_four_bar_redundant_run_is_the_minimal_run() -> None:
     options = dict(method="rk4", dt=0.01, record=10)
     ref = gp.simulate(minimal.model, minimal.q0, minimal.v0, minimal.t_end, solver="direct", **options)
     traj = gp.simulate(redundant.model, redundant.q0, redundant.v0, redundant.t_end, solver="qp", **options)
-    assert traj.success and traj.solver == "gauss-qp:qrqp" and len(traj) == 21
+    # unstabilized rk4 drifts beyond constraint_tol (1e-4 in 2 s): both runs say so alike
+    assert traj.status == ref.status != "failed" and traj.solver == "gauss-qp:qrqp" and len(traj) == 21
     np.testing.assert_allclose(traj.q, ref.q, rtol=0, atol=1e-9)
     np.testing.assert_allclose(traj.v, ref.v, rtol=0, atol=1e-9)
     assert np.ptp(traj.q[:, 0]) > 2 * np.pi  # the crank turns fully
@@ -605,7 +606,7 @@ def test_four_bar_distance_row_run_is_the_minimal_run() -> None:
     options: dict = dict(method="rk4", dt=0.02, t_end=0.2)
     ref = gp.simulate(minimal.model, minimal.q0, minimal.v0, solver="direct", **options)
     traj = gp.simulate(redundant.model, redundant.q0, redundant.v0, **options)
-    assert traj.success and traj.solver.startswith("gauss-qp:") and len(traj) == len(ref)
+    assert traj.status == ref.status != "failed" and traj.solver.startswith("gauss-qp:") and len(traj) == len(ref)
     np.testing.assert_allclose(traj.q, ref.q, rtol=0, atol=1e-8)
 
 
@@ -641,7 +642,7 @@ def test_four_bar_distance_row_simulation_follows_the_minimal_model(lane: str) -
     minimal, redundant = four_bar.build(redundant=False), four_bar.build(third_row="distance")
     ref = gp.simulate(minimal.model, minimal.q0, minimal.v0, _T_LANES, **options)
     traj = gp.simulate(redundant.model, redundant.q0, redundant.v0, _T_LANES, **options)
-    assert traj.success and traj.solver.startswith("gauss-qp:") and traj.q.shape == ref.q.shape
+    assert traj.status == ref.status != "failed" and traj.solver.startswith("gauss-qp:") and traj.q.shape == ref.q.shape
     difference = float(np.max(np.abs(traj.q - ref.q)))
     if "dt" in options:  # the same steps: the right-hand sides agree to round-off, so must the runs
         assert difference <= 0.1 * _integration_error(minimal, options, ref), difference

@@ -142,7 +142,10 @@ def test_ten_seconds_through_the_collinear_positions_at_the_default_settings() -
     no other choice of rows does better — the declared order holds (a pivoted choice there read the drift it
     amplifies as a contradiction, and the run failed at t = 7.06 s)."""
     s = gp.scenes.get("spatial-parallelogram")
-    traj = gp.simulate(s.model, s.q0, s.v0, 10.0, record=np.linspace(0.0, 10.0, 201))
+    with pytest.warns(gp.DriftWarning, match="constraint_tol"):  # unstabilized for 10 s: 8e-8, beyond the default
+        default = gp.simulate(s.model, s.q0, s.v0, 10.0, record=np.linspace(0.0, 10.0, 201))
+    assert default.status == "drifted" and default.t[-1] == 10.0
+    traj = gp.simulate(s.model, s.q0, s.v0, 10.0, record=np.linspace(0.0, 10.0, 201), constraint_tol=1e-6)
     assert traj.success and traj.t[-1] == 10.0
     energy = traj.energy
     assert np.abs(energy - energy[0]).max() < 1e-6 * np.abs(energy).max()

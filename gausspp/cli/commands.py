@@ -153,6 +153,7 @@ def _simulate(
             every_step=every_step,
             rtol=args.rtol,
             atol=args.atol,
+            constraint_tol=args.constraint_tol,
             **options,
         )
 
@@ -178,7 +179,7 @@ def run(args: argparse.Namespace) -> int:
         plot.animate(scene, traj, out=animation)
         print(f"  {'animation':15s} {animation}")
     if not traj.success:
-        raise GaussppError(f"the run failed: {tables.one_line(traj.message)}")
+        raise GaussppError(f"the run {traj.status}: {tables.one_line(traj.message)}")
     return EXIT_OK
 
 
@@ -194,7 +195,7 @@ def verify(args: argparse.Namespace) -> int:
     print(f"path:     {tables.label(scene.name, params)} — {tables.realizations(scene.model)}")
     reached = f" to t = {traj.t[-1]:.6g}" if len(traj) else ""
     print(f"          {traj.method} ({runs.setting(traj, dt, args.rtol)}), {len(traj)} samples{reached}, {wall:.3g} s")
-    if not traj.success:
+    if traj.status == "failed":
         raise GaussppError(f"the simulation failed, nothing to verify: {tables.one_line(traj.message)}")
     target = tables.label(scene.name, {**params, **check_params}) if check_params else "the same model"
     print(f"model:    {target} — {tables.realizations(model)}")

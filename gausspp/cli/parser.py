@@ -94,6 +94,14 @@ def _simulation_options(p: argparse.ArgumentParser, rtol: float, samples: int) -
         help=f"absolute tolerance of adaptive methods (default: {DEFAULT_ATOL:g})",
     )
     p.add_argument(
+        "--constraint-tol",
+        type=_positive(float),
+        default=1e-8,
+        metavar="C",
+        help="the accuracy a successful run keeps: each residual within C·(1 + |state|), the energy balance "
+        "within 100·C of the energy scale; beyond it the run is 'drifted' (default: 1e-8)",
+    )
+    p.add_argument(
         "--samples",
         type=_positive(int),
         default=samples,

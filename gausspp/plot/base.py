@@ -89,7 +89,7 @@ def carried_names(traj: Any, axis: str, n: int) -> list[str] | None:
 
 def suffix(name: str, traj: Any = None) -> str:
     """`` (name, failed at t=…)`` for a legend entry; empty for an unnamed successful run."""
-    failed = traj is not None and getattr(traj, "status", "success") != "success"
+    failed = traj is not None and getattr(traj, "status", "success") == "failed"
     tail = f"failed at t={traj.t[-1]:.3g}" if failed else ""
     inner = ", ".join(s for s in (name, tail) if s)
     return f" ({inner})" if inner else ""

@@ -33,7 +33,7 @@ def work_precision(rows: Sequence[Any], scene: str, ax: Any = None, *, title: st
     plt = pyplot()
     fig = ax.figure if ax is not None else plt.figure(figsize=(7, 4.5))
     ax = ax or fig.add_subplot()
-    mine = [r for r in rows if r.scene == scene and r.status == "success" and r.final_error > 0]
+    mine = [r for r in rows if r.scene == scene and r.status != "failed" and r.final_error > 0]
     methods = list(dict.fromkeys(r.method for r in mine))
     solvers = list(dict.fromkeys(r.solver for r in mine))
     for key in dict.fromkeys((r.method, r.solver) for r in mine):
@@ -47,7 +47,7 @@ def work_precision(rows: Sequence[Any], scene: str, ax: Any = None, *, title: st
             label=f"{key[0]} · {key[1]}",
             ms=4,
         )
-    failed = sum(1 for r in rows if r.scene == scene and r.status != "success")
+    failed = sum(1 for r in rows if r.scene == scene and r.status == "failed")
     head = f"scene {scene}" + (f" ({title})" if title else "")
     ax.set(
         xlabel="wall time (s), minimum of repeats",

@@ -58,7 +58,7 @@ def energy_audit(
     limit = ENERGY_SHARE * tol
     if np.all(np.abs(balance) <= limit * exchanged):  # the exchanges alone are scale enough (NaN goes on)
         return n, None
-    scale = exchanged + _reached(_kinetic(model, t, y, n), early)
+    scale = exchanged + _reached(kinetic_energies(model, t, y, n), early)
     off = np.flatnonzero(~(np.abs(balance) <= limit * scale))
     if not off.size:
         return n, None
@@ -82,7 +82,7 @@ def _reached(values: np.ndarray, early: int) -> np.ndarray:
     return np.maximum(running, running[min(early, values.size - 1)])
 
 
-def _kinetic(model: Model, t: np.ndarray, y: np.ndarray, n: int) -> np.ndarray:
+def kinetic_energies(model: Model, t: np.ndarray, y: np.ndarray, n: int) -> np.ndarray:
     """``½ vᵀ A v`` at up to :data:`KINETIC_SAMPLES` samples of the first ``n`` (0 at the others): one call of the
     mapped kinetic energy (kept in the model's workspace)."""
     nq, nv = model.nq, model.nv

@@ -36,6 +36,7 @@ from .initial import check_on_constraint, initial_state
 from .inputs import DEFAULT_ATOL, DEFAULT_RTOL, Options, check_options
 from .rhs import RightHandSide, step_control_atol
 from .samples import Samples
+from .tolerance import within_tolerance
 from .trajectory import Trajectory
 
 #: Largest number of events (impacts, lift-offs) in one run before it is stopped as Zeno-like.
@@ -91,7 +92,8 @@ def run_contacts(model: Model, q0: Any, v0: Any, lam0: Any, stabilize: Any, opts
             "< 0; start with every gap g ≥ 0"
         )
     samples = EventRun(model, opts, stab, np.concatenate([q, v, lam, [0.0, 0.0]])).samples()
-    return recording.finish(recording.record_contacts(model, samples, opts.drift_tol), samples.failure, opts.throw)
+    traj = recording.finish(recording.record_contacts(model, samples, opts.drift_tol), samples.failure, opts.throw)
+    return within_tolerance(model, traj, opts.constraint_tol)
 
 
 class EventRun:

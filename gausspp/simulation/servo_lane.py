@@ -27,6 +27,7 @@ from ..step.servo_reach import actuators_only, higher_reach
 from .inputs import Options
 from .labels import model_labels
 from .recording import failed
+from .tolerance import within_tolerance
 from .trajectory import Trajectory
 
 #: The lane's name on the trajectory.
@@ -70,7 +71,7 @@ def run_servo(model: Model, q0: Any, v0: Any, opts: Options) -> Trajectory:
     servo = simulate_servo(model, q0, v0, opts.t_end, t0=opts.t0, rtol=opts.rtol, atol=opts.atol, record=record)
     traj = _trajectory(model, servo)
     if servo.status == "success":
-        return traj
+        return within_tolerance(model, traj, opts.constraint_tol)
     failure = IntegrationError(f"the servo route stopped: {servo.message}")
     traj = failed(traj, failure)
     if opts.throw:

@@ -32,6 +32,7 @@ from .inputs import DEFAULT_ATOL, DEFAULT_RTOL, Options, check_options
 from .integrate import run_python, run_scipy
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
+from .tolerance import within_tolerance
 from .trajectory import Trajectory
 
 
@@ -96,6 +97,12 @@ def simulate(
     rest_speed, max_events :
         Unilateral contacts only (:mod:`gausspp.simulation.contacts`): an impact that would leave a contact
         slower than ``rest_speed`` ends in rest; a run with more than ``max_events`` events stops.
+    constraint_tol : float
+        The accuracy the run promises (default 1e-8): the initial data must keep it, and a run that reached
+        ``t_end`` is a success only if every sample keeps ``|g_i| ≤ constraint_tol·(1 + ‖q‖∞)``,
+        ``|Φ_i| ≤ constraint_tol·(1 + ‖v‖∞)`` and, where the energy balance closes, the balance within
+        ``100·constraint_tol`` of the run's energy scale; otherwise its status is ``"drifted"`` (the trajectory
+        whole, a :class:`~gausspp.DriftWarning`; not raised: :mod:`gausspp.simulation.tolerance`).
     drift_tol : float
         How far the motion may leave its constraints before the run counts as failed: a sample with
         ``|g_i| > drift_tol·(1 + ‖q‖∞)`` or ``|Φ_i| > drift_tol·(1 + ‖v‖∞)`` ends the run with a
@@ -150,8 +157,12 @@ def simulate(
         lambda: _labelled(
             chosen.name,
             model.route,
-            lambda: recording.finish(
-                recording.record_smooth(model, rhs, samples, opts.drift_tol), samples.failure, opts.throw
+            lambda: within_tolerance(
+                model,
+                recording.finish(
+                    recording.record_smooth(model, rhs, samples, opts.drift_tol), samples.failure, opts.throw
+                ),
+                opts.constraint_tol,
             ),
         ),
     )

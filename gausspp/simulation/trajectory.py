@@ -43,9 +43,10 @@ class Trajectory:
     work_reaction, work_forces : (N,) arrays
         Accumulated work of the reaction and of the non-conservative forces since ``t[0]``
         (``work_forces`` NaN if the model does not know its forces' power).
-    status : {"success", "failed"}
+    status : {"success", "drifted", "failed"}
+        ``"drifted"``: reached ``t_end``, but a residual or the energy balance left ``constraint_tol``.
     message : str
-        Why a run failed (empty on success).
+        Why a run failed or drifted (empty on success).
     failure : GaussppError or None
         The error that stopped a failed run, with its details (for a
         :class:`~gausspp.RealizabilityError`: ``t``, ``constraint``, ``margin``); ``None`` on success. Not
@@ -109,7 +110,8 @@ class Trajectory:
 
     @property
     def success(self) -> bool:
-        """True if the run reached ``t_end``."""
+        """True if the run reached ``t_end`` within its ``constraint_tol`` (status ``"success"``; a run that reached
+        it beyond the tolerance is ``"drifted"``, one that stopped early ``"failed"``)."""
         return self.status == "success"
 
     def energy_balance(self) -> np.ndarray:

@@ -271,7 +271,7 @@ def general_row(name: str, first: GeneralRun, second: GeneralRun | None) -> Gene
     """The row of scene ``name`` from its run on the first backend (and on the second, for the gap between them)."""
     scene = scenes.get(name, **GENERAL_PARAMS.get(name, {}))
     model, run = scene.model, first.trajectory
-    T = float(run.t[-1]) if run.status != "success" else min(scene.t_end, GENERAL_T_END.get(name, 3.0))
+    T = float(run.t[-1]) if run.status == "failed" else min(scene.t_end, GENERAL_T_END.get(name, 3.0))
     gap = None if second is None else _on_grid_gap(run, second.trajectory, _grid(T))
     exact = None
     if scene.exact is not None:

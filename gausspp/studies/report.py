@@ -88,7 +88,7 @@ def table(rows: Sequence[Row]) -> str:
     )
     lines = [head, "-" * len(head)]
     for r in rows:
-        if r.status != "success":
+        if r.status == "failed":
             lines.append(f"{r.scene:18s} {r.method:13s} {r.solver:12s} {r.setting:16s} FAILED: {r.message[:60]}")
             continue
         lines.append(
@@ -104,7 +104,7 @@ def best_per_scene(rows: Sequence[Row], target: float = 1e-10) -> dict[str, Row 
     out: dict[str, Row | None] = {}
     for r in rows:
         out.setdefault(r.scene, None)
-        if r.status == "success" and r.final_error <= target:
+        if r.status != "failed" and r.final_error <= target:
             best = out[r.scene]
             if best is None or r.wall_time < best.wall_time:
                 out[r.scene] = r

@@ -155,7 +155,7 @@ def _state_rows(scene: scenes.Scene, traj: Trajectory) -> list[tuple[str, str]]:
     if traj.saturated.size and traj.saturated.any():
         share = traj.saturated.any(axis=1).mean()
         rows.append(("saturation", f"{share:.0%} of the samples, tracking error up to {traj.tracking_error.max():.3g}"))
-    if scene.exact is not None and traj.success:
+    if scene.exact is not None and traj.status != "failed":
         q_ex, v_ex = scene.exact(float(traj.t[-1]))
         err = float(np.abs(np.concatenate([traj.q[-1] - q_ex, traj.v[-1] - v_ex])).max())
         rows.append(("vs exact", f"{err:.2e} (largest final-state error against the known motion)"))

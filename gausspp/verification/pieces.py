@@ -87,7 +87,7 @@ def verify_pieces(
         )
     problems = [p for piece, ver in done if (p := _pull(model, piece, ver))]
     notes = []
-    if getattr(trajectory, "status", "success") != "success":
+    if getattr(trajectory, "status", "success") == "failed":
         notes.append(
             f"the run failed ({getattr(trajectory, 'message', '')}): verified what it computed, up to "
             f"t={path.t[-1]:.6g}"

@@ -68,7 +68,7 @@ def verify(
     check_model(model)
     if method not in ("qp", "closed-form"):
         raise UnknownNameError(f"method={method!r} is unknown; use 'qp' or 'closed-form'")
-    failed = getattr(trajectory, "status", "success") != "success"
+    failed = getattr(trajectory, "status", "success") == "failed"
     if model.contacts or model.bounded or failed:
         if nodes is not None:
             raise InputError(
