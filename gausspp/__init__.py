@@ -6,14 +6,14 @@ A constraint is kept by a *realization* — ideal, a controlled force (Béghin),
 compulsion as a QP and is cross-checked against the direct multiplier solution.
 """
 
-from __future__ import annotations
-
 import sys
 
-from . import plot, scenes, servo
+from . import friction, plot, scenes, servo
 from .errors import (
+    BackendUnavailableError,
     DriftError,
     DriftWarning,
+    FrozenModelError,
     GaussppError,
     GaussppWarning,
     InitialDataError,
@@ -24,6 +24,7 @@ from .errors import (
     NonFiniteError,
     NotAffineError,
     NotPositiveDefiniteError,
+    PainleveError,
     QPSolveError,
     RealizabilityError,
     RealizabilityWarning,
@@ -33,6 +34,7 @@ from .errors import (
     SymbolicError,
     UnknownNameError,
 )
+from .friction import FrictionContact, FrictionRun, simulate_friction
 from .model.constraints import Constraint, Holonomic, Unilateral
 from .model.from_sympy import SympyModel, from_sympy
 from .model.mechanism import Lagrangian, MassMatrix, Mechanism, RigidBody
@@ -62,14 +64,18 @@ __version__ = "0.1.0"
 # wherever they live in the layout (docs/architecture.md).
 for _module in (methods, qp, realizability, report, sweeps):
     sys.modules[f"{__name__}.{_module.__name__.rpartition('.')[2]}"] = _module
-del _module
+del _module, sys  # nothing but the public names, dunders and subpackages in dir(gausspp)
 
 __all__ = [
+    "BackendUnavailableError",
+    "FrozenModelError",
     "acceleration_qp",
     "Baumgarte",
     "Constraint",
     "CrossCheck",
     "Force",
+    "FrictionContact",
+    "FrictionRun",
     "from_mjcf",
     "from_sympy",
     "GaussppError",
@@ -94,6 +100,7 @@ __all__ = [
     "NonFiniteError",
     "NotAffineError",
     "NotPositiveDefiniteError",
+    "PainleveError",
     "QPSolveError",
     "RealizabilityError",
     "RealizabilityWarning",
@@ -115,6 +122,7 @@ __all__ = [
     "Verification",
     "load_trajectory",
     "methods",
+    "friction",
     "plot",
     "replay",
     "servo",
@@ -131,6 +139,7 @@ __all__ = [
     "report",
     "scenes",
     "simulate",
+    "simulate_friction",
     "linearize",
     "Linearization",
     "sweep",

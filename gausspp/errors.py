@@ -92,6 +92,26 @@ class DriftError(IntegrationError):
         self.t, self.constraint, self.residual = t, constraint, residual
 
 
+class PainleveError(GaussppError):
+    """Painlevé's paradox: a sliding contact whose friction makes the normal problem have no solution or two.
+
+    Attributes give the time, the contact and the critical friction coefficient beyond which it happens.
+    """
+
+    def __init__(
+        self, message: str, *, t: float = float("nan"), contact: str = "", mu_critical: float = float("nan")
+    ) -> None:
+        super().__init__(message)
+        self.t, self.contact, self.mu_critical = t, contact, mu_critical
+
+    def __reduce__(self):  # type: ignore[no-untyped-def]
+        return (_painleve, (self.args[0] if self.args else "", self.t, self.contact, self.mu_critical))
+
+
+def _painleve(message: str, t: float, contact: str, mu_critical: float) -> PainleveError:
+    return PainleveError(message, t=t, contact=contact, mu_critical=mu_critical)
+
+
 class FrozenModelError(GaussppError, AttributeError):
     """An attribute of a :class:`~gausspp.Model` was set: a model does not change once built."""
 

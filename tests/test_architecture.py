@@ -25,7 +25,14 @@ _spec.loader.exec_module(arch)
 
 PACKAGE = ROOT / "gausspp"
 #: What the drawing code may not import: everything that computes.
-COMPUTING = ("gausspp.model", "gausspp.step", "gausspp.simulation", "gausspp.verification", "gausspp.studies")
+COMPUTING = (
+    "gausspp.model",
+    "gausspp.step",
+    "gausspp.simulation",
+    "gausspp.friction",
+    "gausspp.verification",
+    "gausspp.studies",
+)
 
 
 def _package(tmp_path: Path, files: dict[str, str]) -> Path:
@@ -118,6 +125,7 @@ LAYERS = (
     "gausspp.model",
     "gausspp.servo",  # the servo route integrates a model of its own; gp.simulate runs it (simulation/servo_lane.py)
     "gausspp.simulation",
+    "gausspp.friction",  # frictional contacts: a mechanism and its contacts, integrated on their own
     "gausspp.scenes",
     "gausspp.verification",
     "gausspp.studies",
@@ -168,3 +176,19 @@ def test_a_model_does_not_change() -> None:
     assert np.isfinite(traj.q).all()
     kinds = {key[0] for key in workspace(model).keys()}  # the artefacts are kept beside the model
     assert {"kernel", "compiled-run", "integral-data"} <= kinds, kinds
+
+
+def test_the_namespace_holds_the_public_names_and_subpackages_only() -> None:
+    """``dir(gausspp)``: ``__all__``, dunder names and gausspp's own modules — nothing leaked (``sys``,
+    ``annotations``); every public error and warning of :mod:`gausspp.errors` is exported."""
+    import inspect
+    import pkgutil
+
+    import gausspp
+    from gausspp import errors
+
+    own = {m.name for m in pkgutil.iter_modules(gausspp.__path__)}
+    leaked = [n for n in dir(gausspp) if n not in gausspp.__all__ and not n.startswith("__") and n not in own]
+    assert leaked == []
+    raised = {n for n, c in inspect.getmembers(errors, inspect.isclass) if issubclass(c, Exception | Warning)}
+    assert raised - set(gausspp.__all__) == set()

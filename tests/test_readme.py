@@ -33,7 +33,7 @@ from gausspp.cli.parser import build_parser
 
 ROOT = Path(__file__).resolve().parents[1]
 README = ROOT / "README.md"
-RUNNABLE = [README, ROOT / "docs" / "guide.md", ROOT / "docs" / "index.md"]
+RUNNABLE = [README, ROOT / "docs" / "guide.md", ROOT / "docs" / "index.md", ROOT / "docs" / "friction.md"]
 DOCS = [*RUNNABLE, ROOT / "docs" / "theory.md"]
 
 FENCE = re.compile(r"^```(\w*)\n(.*?)^```", re.S | re.M)

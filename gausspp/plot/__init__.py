@@ -11,6 +11,8 @@ Figures (one module of this package each)
 -----------------------------------------
 trajectory          ``q(t)``, ``v(t)`` and optionally the phase portrait ``(qᵢ, vᵢ)``     (motion)
 reaction_over_time  ``u(t)`` (``λ`` or ``λ̇``), compulsion ``Z(t)`` and the realizability margin  (motion)
+friction            slip, normal and friction forces and energy of frictional runs  (friction)
+stick_slip_map      a block at rest on a slope: sticks or slides, over (α, μ)  (friction)
 contacts            recorded gaps ``g(t)``, contact forces and energy of a run with contacts  (impacts)
 realizability_map   the margin of a servo torque along ``n`` over the sphere of directions ``n``  (margin_map)
 three_realizations  one constraint ``(ω, l) = 0`` kept ideally, by a servo torque, by a flywheel  (realizations)
@@ -28,6 +30,7 @@ from typing import Any
 
 from .animation import animate
 from .base import palette, pyplot
+from .friction import friction, stick_slip_map
 from .impacts import contacts
 from .integral import verification
 from .margin_map import realizability_map
@@ -48,12 +51,14 @@ __all__ = [
     "THREE_LABELS",
     "animate",
     "contacts",
+    "friction",
     "palette",
     "pyplot",
     "reaction_over_time",
     "realizability_map",
     "save_work_precision",
     "skate",
+    "stick_slip_map",
     "three_realizations",
     "trajectory",
     "verification",

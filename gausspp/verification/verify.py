@@ -65,6 +65,13 @@ def verify(
     say what was checked; a trajectory of which no piece can be checked raises
     :class:`~gausspp.InputError` with the reasons.
     """
+    if type(trajectory).__name__ == "FrictionRun":  # gausspp.friction's result: no principle (23) for it here
+        raise InputError(
+            "gp.verify does not check frictional motions: (23) compares a path with the motions of ideal or "
+            "prescribed realizations, and Coulomb friction is a reaction whose direction depends on the motion "
+            "itself (docs/friction.md); check a frictional run by its closed forms and its energy, which friction "
+            "never raises (FrictionRun.energy)"
+        )
     check_model(model)
     if method not in ("qp", "closed-form"):
         raise UnknownNameError(f"method={method!r} is unknown; use 'qp' or 'closed-form'")

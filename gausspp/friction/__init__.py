@@ -1,0 +1,13 @@
+"""Coulomb friction on unilateral contacts, by Gauss's principle (docs/friction.md).
+
+:class:`FrictionContact` declares a contact (gap, slip, ``μ``, ``μ_s``, restitution);
+:func:`simulate_friction` integrates a mechanism with such contacts event by event (stick, slide, lift-off,
+impact); :func:`gauss_qp_step` solves one step as Gauss's QP over the conceivable accelerations with the
+friction cone, the independent check of the direct solution (:mod:`.modes`).
+"""
+
+from .contact import FrictionContact
+from .gauss_qp import gauss_qp_step
+from .integrate import FrictionRun, simulate_friction
+
+__all__ = ["FrictionContact", "FrictionRun", "gauss_qp_step", "simulate_friction"]

@@ -1,0 +1,75 @@
+"""A frictional contact: a gap that must stay open or closed, and a slip velocity that Coulomb's law resists.
+
+A contact of a planar motion is given by two functions of the generalized coordinates and velocities:
+
+* the gap ``g(q) ≥ 0`` (open while positive), its normal Jacobian ``J_n = ∂ġ/∂v``;
+* the slip ``s(q, v) = J_t(q) v``, the velocity of the contact point along the surface (one component).
+
+While closed the surface pushes with ``N ≥ 0`` along ``J_nᵀ`` and resists slip with a tangential force ``F``
+along ``J_tᵀ``: while sliding ``F = −μ N sign(s)`` (kinetic coefficient ``μ``); while sticking ``s = 0`` and
+``|F| ≤ μ_s N`` (static coefficient ``μ_s ≥ μ``, default ``μ``). Restitution ``e`` is Newton's coefficient of
+an impact that closes the contact (docs/friction.md).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+from ..errors import InputError
+
+
+def _coefficient(owner: str, name: str, value: Any, upper: float = math.inf) -> float:
+    try:
+        x = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{owner}: {name} must be a number, got {value!r}") from None
+    if not (0.0 <= x <= upper) or math.isnan(x):
+        bound = "[0, 1]" if upper == 1.0 else "≥ 0 and finite"
+        raise InputError(f"{owner}: {name} must be {bound}, got {value!r}")
+    return x
+
+
+class FrictionContact:
+    """A unilateral contact with Coulomb friction (module docstring).
+
+    Parameters
+    ----------
+    gap : callable ``q -> scalar``
+        The gap, positive when open (casadi operations).
+    slip : callable ``(q, v) -> scalar``
+        The slip velocity of the contact point along the surface, linear in ``v``.
+    mu : float
+        Kinetic friction coefficient ``μ ≥ 0``.
+    mu_static : float, optional
+        Static coefficient ``μ_s ≥ μ`` (default ``μ``).
+    restitution : float in [0, 1]
+        Newton's coefficient of an impact closing the contact (default 0: plastic).
+    name : str, optional
+    """
+
+    def __init__(
+        self,
+        gap: Callable[..., Any],
+        slip: Callable[..., Any],
+        mu: float,
+        *,
+        mu_static: float | None = None,
+        restitution: float = 0.0,
+        name: str | None = None,
+    ) -> None:
+        self.name = "contact" if name is None else str(name)
+        owner = f"FrictionContact {self.name!r}"
+        for what, fn in (("gap", gap), ("slip", slip)):
+            if not callable(fn):
+                raise InputError(f"{owner}: {what} must be a function, got {fn!r}")
+        self.gap, self.slip = gap, slip
+        self.mu = _coefficient(owner, "mu", mu)
+        self.mu_static = self.mu if mu_static is None else _coefficient(owner, "mu_static", mu_static)
+        if self.mu_static < self.mu:
+            raise InputError(f"{owner}: mu_static={self.mu_static:g} is below mu={self.mu:g}; static ≥ kinetic")
+        self.restitution = _coefficient(owner, "restitution", restitution, upper=1.0)
+
+    def __repr__(self) -> str:
+        return f"FrictionContact(name={self.name!r}, mu={self.mu:g}, mu_static={self.mu_static:g})"

@@ -1,0 +1,269 @@
+"""Event-driven simulation of a mechanism with frictional contacts (docs/friction.md).
+
+Between events the contact modes are fixed (:mod:`.modes`) and scipy's DOP853 (Radau while a two-component slip
+slides: :meth:`_Runner.method`) integrates ``q̇ = K(q, v)``,
+``v̇ = q̈``. Its events end a phase where a mode stops holding: an open contact's gap closes, a closed one's
+normal force ``N`` falls to zero (lift-off), a sliding one's slip ``s`` reaches zero (it stops: it sticks or
+slides back), a sticking one's friction reaches the cone ``|F| = μ_s N`` (it starts to slide). At each event the
+modes are chosen anew; a gap closing with approaching speed is an impact first (Newton's restitution on the
+normal velocity, Coulomb's law on the impulses: :func:`impact`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import GaussppError, InputError, IntegrationError, ShapeError
+from ..model.mechanism import Mechanism
+from ..model.model import Model
+from ..validation import array, positive
+from .contact import FrictionContact
+from .kinematics import ContactKinematics, ContactState
+from .modes import OPEN, SLIDE, STICK, Modes, Solution, check_painleve, choose, solve
+
+#: Relative tolerance of "on the contact" and "not slipping" at an event, and of the laws' inequalities.
+CONTACT_TOL = 1e-8
+#: The laws' inequalities (``N ≥ 0``, ``|F| ≤ μ_s N``, ``g̈ ≥ 0``) hold to this, relative to the forces' scale.
+LAW_TOL = 1e-12
+#: A two-component slip below this (relative to the velocities' size) slides along the phase's first direction.
+SLIP_FLOOR = 1e-7
+
+
+@dataclass
+class FrictionRun:
+    """A frictional motion: samples ``t, q, v``; per sample the contact ``modes``, normal forces ``N`` (one
+    column per contact) and friction forces ``F`` (one column per slip component, contacts in order) and the
+    ``energy``; the ``events`` (time, kind, contact);
+    ``status`` ``"success"`` or ``"failed"`` with the ``message`` and the ``failure`` (what was computed is kept)."""
+
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    modes: list[tuple[str, ...]]
+    N: np.ndarray
+    F: np.ndarray
+    energy: np.ndarray
+    contact_names: tuple[str, ...]
+    events: list[dict[str, Any]] = field(default_factory=list)
+    status: str = "success"
+    message: str = ""
+    failure: Exception | None = None
+
+    @property
+    def success(self) -> bool:
+        return self.status == "success"
+
+
+class _Runner:
+    def __init__(self, mechanism: Mechanism, contacts: list[FrictionContact]) -> None:
+        self.mech, self.contacts = mechanism, contacts
+        self.kin = ContactKinematics(mechanism, contacts)
+        self.nq, self.nv = self.kin.nq, self.kin.nv
+        self.qdot = ca.Function("qdot", [mechanism.q, mechanism.v], [mechanism.qdot])
+
+    # -- one state --------------------------------------------------------------------------------------------
+    def split(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return y[: self.nq], y[self.nq :]
+
+    def accel(self, st: ContactState, modes: Modes, v: np.ndarray) -> Solution:
+        """The acceleration under ``modes`` at velocity ``v``; a two-component slip slides against its current
+        direction (the phase's first direction while the slip is below :data:`SLIP_FLOOR`: a slip that starts from
+        zero grows along it, and round-off has no direction)."""
+        dirs = list(modes.dirs)
+        for i, kind in enumerate(modes.kinds):
+            if kind == SLIDE and st.s[i].size > 1:
+                size = np.linalg.norm(st.s[i])
+                if size > SLIP_FLOOR * (1.0 + np.abs(v).max()):
+                    dirs[i] = st.s[i] / size
+        x0 = np.linalg.solve(st.A, st.f)
+        sol = solve(st, self.contacts, Modes(modes.kinds, tuple(dirs)), x0, st.phin, st.phit)
+        if sol is None:
+            raise IntegrationError("the contact rows became dependent: the modes cannot be kept")
+        return sol
+
+    def rhs(self, modes: Modes) -> Any:
+        def f(_t: float, y: np.ndarray) -> np.ndarray:
+            q, v = self.split(y)
+            st = self.kin(q, v)
+            return np.concatenate([np.array(self.qdot(q, v)).ravel(), self.accel(st, modes, v).x])
+
+        return f
+
+    def method(self, modes: Modes) -> str:
+        """DOP853, or Radau where a two-component slip slides: its direction follows the slip with a rate
+        ``μN/(m|s|)`` that grows without bound as the slip starts from or returns to zero — stiff (an explicit
+        method takes ~1e5 steps to leave a slip of 1e-7 m/s where Radau takes a few dozen)."""
+        stiff = any(k == SLIDE and self.kin.dims[i] > 1 for i, k in enumerate(modes.kinds))
+        return "Radau" if stiff else "DOP853"
+
+    def events(self, modes: Modes) -> list[Any]:
+        out = []
+        for i, kind in enumerate(modes.kinds):
+            if kind == OPEN:
+                out.append(self._event(modes, lambda st, sol, i=i: st.g[i], ("closes", i)))
+            else:
+                out.append(self._event(modes, lambda st, sol, i=i: sol.N[i], ("lifts off", i)))
+            if kind == SLIDE:  # the slip along the phase's first direction reaches zero
+                d = modes.dirs[i]
+                out.append(self._event(modes, lambda st, sol, i=i, d=d: float(d @ st.s[i]), ("stops slipping", i)))
+            if kind == STICK:
+                mu_s = self.contacts[i].mu_static
+                cone = lambda st, sol, i=i, m=mu_s: m * sol.N[i] - np.linalg.norm(sol.F[i])  # noqa: E731
+                out.append(self._event(modes, cone, ("starts to slip", i)))
+        return out
+
+    def _event(self, modes: Modes, value: Any, what: tuple[str, int]) -> Any:
+        def event(_t: float, y: np.ndarray) -> float:
+            q, v = self.split(y)
+            st = self.kin(q, v)
+            return float(value(st, self.accel(st, modes, v)))
+
+        event.terminal, event.direction, event.what = True, -1, what  # type: ignore[attr-defined]
+        return event
+
+    # -- modes at an event --------------------------------------------------------------------------------------
+    def modes_at(
+        self, t: float, q: np.ndarray, v: np.ndarray, fired: tuple[tuple[str, int], ...] = ()
+    ) -> tuple[Modes, np.ndarray, Solution]:
+        """The modes from the state ``(q, v)`` (after an impact if a contact closes approaching); a contact whose
+        event ``fired`` may not keep the mode that event ended (it sits on that mode's boundary)."""
+        st = self.kin(q, v)
+        size = 1.0 + np.abs(q).max(initial=0.0)
+        speed = 1.0 + np.abs(v).max(initial=0.0)
+        touching = [i for i in range(len(self.contacts)) if st.g[i] <= CONTACT_TOL * size]
+        approaching = [i for i in touching if st.gdot[i] < -CONTACT_TOL * speed]
+        if approaching:
+            v = self.impact(t, st, touching, v)
+            st = self.kin(q, v)
+        candidates = [i for i in touching if abs(st.gdot[i]) <= CONTACT_TOL * speed * 10]
+        slipping = {
+            i: st.s[i] / np.linalg.norm(st.s[i]) for i in candidates if np.linalg.norm(st.s[i]) > CONTACT_TOL * speed
+        }
+        x0 = np.linalg.solve(st.A, st.f)
+        tol = LAW_TOL * (1.0 + np.abs(st.f).max(initial=0.0) + np.abs(x0).max(initial=0.0))
+        forced = {}
+        for kind, i in fired:
+            if kind == "starts to slip":
+                forced[i] = (SLIDE, OPEN)
+            elif kind == "lifts off":
+                forced[i] = (OPEN,)
+        modes, sol = choose(st, self.contacts, candidates, slipping, x0, st.phin, st.phit, t, tol, forced)
+        return modes, v, sol
+
+    def impact(self, t: float, st: ContactState, touching: list[int], v: np.ndarray) -> np.ndarray:
+        """The velocity after an impact: Newton's ``ġ⁺ = −e ġ⁻`` (or opening) and Coulomb on the impulses."""
+        e = np.array([c.restitution for c in self.contacts])
+        target_n = np.where(st.gdot < 0, -e * st.gdot, 0.0)
+        target_t = [np.zeros_like(si) for si in st.s]
+        # every contact may stick, slide or open in an impact: Coulomb's law on the impulses, the tangential one
+        # against the slip it would otherwise have to stop
+        _, sol = choose(st, self.contacts, touching, {}, v, target_n, target_t, t, CONTACT_TOL)
+        return sol.x
+
+
+def simulate_friction(
+    system: Mechanism | Model,
+    contacts: list[FrictionContact],
+    q0: Any,
+    v0: Any,
+    t_end: float,
+    *,
+    rtol: float = 1e-10,
+    atol: float = 1e-12,
+    max_events: int = 1000,
+    throw: bool = True,
+    record: Any = None,
+) -> FrictionRun:
+    """Simulate ``system`` (a mechanism, or a model without constraints) with frictional ``contacts`` from
+    ``(q0, v0)`` to ``t_end`` (module docstring). Raises :class:`~gausspp.PainleveError` where sliding makes
+    the contact problem inconsistent; a failure midway keeps what was computed (``.run``, or the returned run
+    marked failed with ``throw=False``). ``record``: increasing times to sample at (besides the events);
+    default every step the integrator takes."""
+    from scipy.integrate import solve_ivp  # imported here: ``import gausspp`` does not load scipy's integrators
+
+    mech = system.mechanism if isinstance(system, Model) else system
+    if isinstance(system, Model) and system.k:
+        raise InputError("simulate_friction takes a mechanism (or a model without constraint rows)")
+    if not isinstance(mech, Mechanism):
+        raise InputError(f"simulate_friction takes a gausspp mechanism or model, got {type(system).__name__}")
+    contacts = list(contacts)
+    if not contacts or not all(isinstance(c, FrictionContact) for c in contacts):
+        raise InputError("contacts must be a non-empty list of gp.FrictionContact")
+    runner = _Runner(mech, contacts)
+    q = array("simulate_friction", "q0", q0).ravel()
+    v = array("simulate_friction", "v0", v0).ravel()
+    if q.size != runner.nq or v.size != runner.nv:
+        raise ShapeError(f"simulate_friction: q0 needs {runner.nq} entries and v0 {runner.nv}, got {q.size}, {v.size}")
+    t_end = float(positive("t_end", t_end))
+    rtol, atol = float(positive("rtol", rtol)), float(positive("atol", atol))
+    times = None if record is None else array("simulate_friction", "record", record).ravel()
+    if times is not None and (np.any(np.diff(times) <= 0) or times.size == 0):
+        raise InputError("simulate_friction: record must be increasing times")
+    ts, ys, mode_rows, Ns, Fs, energies, events = [], [], [], [], [], [], []
+    t = 0.0
+    failure: Exception | None = None
+    try:
+        modes, v, _ = runner.modes_at(t, q, v)
+        y = np.concatenate([q, v])
+        while t < t_end:
+            check_painleve(runner.kin(*runner.split(y)), contacts, modes, t)
+            watched = runner.events(modes)
+            sol = solve_ivp(
+                runner.rhs(modes),
+                (t, t_end),
+                y,
+                method=runner.method(modes),
+                rtol=rtol,
+                atol=atol,
+                events=watched,
+                t_eval=None if times is None else np.append(times[(times > t) & (times < t_end)], t_end),
+            )
+            if sol.status == -1:
+                raise IntegrationError(f"the integrator failed at t={sol.t[-1]:.6g}: {sol.message}")
+            ends = [(te[0], ye[0]) for te, ye in zip(sol.t_events, sol.y_events, strict=True) if te.size]
+            if times is not None:  # the phase's start, the sampled times, then the event's state
+                seg_t, seg_y = [t, *sol.t], [y, *sol.y.T]
+                if ends:
+                    seg_t.append(ends[0][0]), seg_y.append(ends[0][1])
+            else:
+                seg_t, seg_y = list(sol.t), list(sol.y.T)
+            for ti, yi in zip(seg_t, seg_y, strict=True):
+                st = runner.kin(*runner.split(yi))
+                acc = runner.accel(st, modes, runner.split(yi)[1])
+                ts.append(ti), ys.append(yi), mode_rows.append(modes.names()), Ns.append(acc.N)
+                Fs.append(np.concatenate(acc.F)), energies.append(st.energy)
+            t, y = float(seg_t[-1]), np.asarray(seg_y[-1])
+            if sol.status == 0:
+                break
+            fired = [ev.what for ev, te in zip(watched, sol.t_events, strict=True) if te.size]
+            if len(events) >= max_events:
+                raise IntegrationError(f"more than max_events={max_events} contact events by t={t:.6g}")
+            q, v = runner.split(y)
+            modes, v, _ = runner.modes_at(t, q, v, tuple(fired))
+            y = np.concatenate([q, v])
+            for kind, i in fired:
+                events.append({"t": t, "kind": kind, "contact": contacts[i].name, "modes": modes.names()})
+    except GaussppError as exc:
+        failure = exc
+    Y = np.array(ys) if ys else np.zeros((0, runner.nq + runner.nv))
+    run = FrictionRun(
+        t=np.array(ts),
+        q=Y[:, : runner.nq],
+        v=Y[:, runner.nq :],
+        modes=mode_rows,
+        N=np.array(Ns).reshape(-1, len(contacts)),
+        F=np.array(Fs).reshape(-1, int(sum(runner.kin.dims))),
+        energy=np.array(energies),
+        contact_names=tuple(c.name for c in contacts),
+        events=events,
+    )
+    if failure is not None:
+        run.status, run.message, run.failure = "failed", f"{type(failure).__name__}: {failure}", failure
+        if throw:
+            failure.run = run  # type: ignore[attr-defined]
+            raise failure
+    return run

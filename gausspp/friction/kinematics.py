@@ -1,0 +1,93 @@
+"""The numbers a frictional step reads at a state, from one compiled casadi function.
+
+For contacts ``i = 1..c`` with gaps ``g_i(q)`` and slips ``s_i = J_t,i(q) v``:
+
+* ``ġ_i = J_n,i v`` with ``J_n,i = ∂g_i/∂q · ∂q̇/∂v``; ``g̈_i = J_n,i q̈ − φ_n,i`` with ``φ_n,i = −∂(J_n,i v)/∂q · q̇``;
+* ``ṡ_i = J_t,i q̈ − φ_t,i`` with ``φ_t,i = −∂s_i/∂q · q̇``;
+
+so that a closed contact keeps ``g̈ = 0`` by ``J_n q̈ = φ_n`` and a sticking one ``ṡ = 0`` by ``J_t q̈ = φ_t``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ..errors import InputError
+from ..model.mechanism import Mechanism
+from ..model.symbolic import evaluate
+from .contact import FrictionContact
+
+
+@dataclass(frozen=True)
+class ContactState:
+    """The mechanism and its contacts at ``(q, v)``: ``A, f`` and, per contact, ``g, ġ, J_n, φ_n`` (rows of
+    arrays) and ``s (d,), J_t (d, nv), φ_t (d,)`` (lists: a contact's slip has ``d = 1`` or ``2`` components);
+    ``energy`` (NaN where the mechanism does not know it)."""
+
+    A: np.ndarray
+    f: np.ndarray
+    g: np.ndarray
+    gdot: np.ndarray
+    Jn: np.ndarray
+    phin: np.ndarray
+    s: list[np.ndarray]
+    Jt: list[np.ndarray]
+    phit: list[np.ndarray]
+    energy: float
+
+
+class ContactKinematics:
+    """One compiled function ``(q, v) ↦`` :class:`ContactState` for a mechanism and its frictional contacts."""
+
+    def __init__(self, mechanism: Mechanism, contacts: list[FrictionContact]) -> None:
+        mech = mechanism
+        q, v = mech.q, mech.v
+        if ca.depends_on(ca.vertcat(ca.vec(ca.SX(mech.A)), ca.SX(mech.f)), mech.t):
+            raise InputError("frictional contacts take a mechanism without explicit time (A and f of q and v)")
+        gaps, slips = [], []
+        for c in contacts:
+            gaps.append(evaluate(lambda q_, c=c: c.gap(q_), (q,), (1, 1), f"gap of contact {c.name!r}"))
+            slip = evaluate(lambda q_, v_, c=c: c.slip(q_, v_), (q, v), (None, 1), f"slip of contact {c.name!r}")
+            if slip.numel() not in (1, 2):
+                raise InputError(f"the slip of contact {c.name!r} has {slip.numel()} components; give 1 or 2")
+            slips.append(slip)
+        g, s = ca.vertcat(*gaps), ca.vertcat(*slips)
+        qdot = mech.qdot
+        gdot = ca.jacobian(g, q) @ qdot
+        Jn, Jt = ca.jacobian(gdot, v), ca.jacobian(s, v)
+        if ca.depends_on(Jt, v) or ca.depends_on(ca.jacobian(gdot, v), v):
+            raise InputError("a contact's slip must be linear in the velocities v")
+        phin = -(ca.jacobian(Jn @ v, q) @ qdot)
+        phit = -(ca.jacobian(Jt @ v, q) @ qdot)
+        energy = mech.energy if mech.energy is not None else ca.SX(np.nan)
+        self.c, self.nq, self.nv = len(contacts), mech.q.numel(), mech.v.numel()
+        self.dims = tuple(int(x.numel()) for x in slips)
+        self.offsets = np.concatenate([[0], np.cumsum(self.dims)]).astype(int)
+        parts = [mech.A, mech.f, g, gdot, Jn, phin, s, Jt, phit, energy]
+        self.sizes = [(int(x.size1()), int(x.size2())) for x in map(ca.SX, parts)]
+        # one flat output: a casadi call from Python costs ~25 µs, and each output's conversion as much again
+        self.fn = ca.Function("contact_state", [q, v], [ca.vertcat(*[ca.vec(ca.SX(x)) for x in parts])])
+
+    def __call__(self, q: np.ndarray, v: np.ndarray) -> ContactState:
+        flat = self.fn(q, v).full().ravel()
+        out, k = [], 0
+        for rows, cols in self.sizes:  # casadi's vec is column-major
+            out.append(flat[k : k + rows * cols].reshape((rows, cols), order="F"))
+            k += rows * cols
+        c, nv, o = self.c, self.nv, self.offsets
+        s, Jt, phit = out[6].ravel(), out[7].reshape(-1, nv), out[8].ravel()
+        return ContactState(
+            A=out[0],
+            f=out[1].ravel(),
+            g=out[2].ravel(),
+            gdot=out[3].ravel(),
+            Jn=out[4].reshape(c, nv),
+            phin=out[5].ravel(),
+            s=[s[o[i] : o[i + 1]] for i in range(c)],
+            Jt=[Jt[o[i] : o[i + 1]] for i in range(c)],
+            phit=[phit[o[i] : o[i + 1]] for i in range(c)],
+            energy=float(out[9][0, 0]),
+        )

@@ -1,0 +1,98 @@
+"""Frictional test bodies. Planar: a block on a slope, a round body on a table, a rod on its end, a box on two
+corners. Spatial (a two-component slip): a block on a slope and a ball on a table. Each returns
+``(mechanism, contacts)`` for :func:`~gausspp.friction.simulate_friction`; gravity ``G = 9.81`` along ``−y``."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+from ..model.mechanism import Lagrangian
+from .contact import FrictionContact
+
+G = 9.81
+
+
+def incline(alpha: float, mu: float, mu_static: float | None = None, m: float = 1.0) -> tuple:
+    """A block on a slope of angle ``alpha``: ``q = (x, y)``, ``x`` down the slope, ``y`` off it."""
+    mech = Lagrangian(
+        2,
+        T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2),
+        V=lambda q, t: m * G * (-np.sin(alpha) * q[0] + np.cos(alpha) * q[1]),
+    )
+    return mech, [FrictionContact(lambda q: q[1], lambda q, v: v[0], mu, mu_static=mu_static, name="base")]
+
+
+def round_body(mu: float, k: float, r: float = 0.1, m: float = 1.0, slope: float = 0.0, e: float = 0.0) -> tuple:
+    """A ball (``k = 2/5``), disc (1/2) or hoop (1) of radius ``r``, inertia ``k m r²``: ``q = (x, y, θ)``, the
+    contact point's slip ``ẋ + r θ̇``; on a slope of angle ``slope`` (``x`` down it)."""
+    mech = Lagrangian(
+        3,
+        T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2) + 0.5 * k * m * r * r * v[2] ** 2,
+        V=lambda q, t: m * G * (-np.sin(slope) * q[0] + np.cos(slope) * q[1]),
+    )
+    return mech, [FrictionContact(lambda q: q[1] - r, lambda q, v: v[0] + r * v[2], mu, restitution=e, name="table")]
+
+
+def rod(mu: float, half: float = 0.5, m: float = 1.0) -> tuple:
+    """A uniform rod of length ``2·half``: ``q = (x, y, θ)`` of its centre and its angle to the floor, touching it
+    with its lower end ``(x − half cos θ, y − half sin θ)``."""
+    mech = Lagrangian(
+        3,
+        T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2) + 0.5 * (m * half**2 / 3) * v[2] ** 2,
+        V=lambda q, t: m * G * q[1],
+    )
+    contact = FrictionContact(
+        lambda q: q[1] - half * ca.sin(q[2]), lambda q, v: v[0] + half * ca.sin(q[2]) * v[2], mu, name="end"
+    )
+    return mech, [contact]
+
+
+def box(mu: float, w: float = 0.4, h: float = 0.2, m: float = 1.0, mu_static: float | None = None) -> tuple:
+    """A box ``w × h`` on its two bottom corners: ``q = (x, y, θ)`` of its centre."""
+    inertia = m * (w * w + h * h) / 12
+    mech = Lagrangian(
+        3,
+        T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2) + 0.5 * inertia * v[2] ** 2,
+        V=lambda q, t: m * G * q[1],
+    )
+    contacts = []
+    for side, name in ((-1.0, "back"), (1.0, "front")):
+        dx, dy = side * w / 2, -h / 2
+
+        def gap(q, dx=dx, dy=dy):  # the corner's height
+            return q[1] + dx * ca.sin(q[2]) + dy * ca.cos(q[2])
+
+        def slip(q, v, dx=dx, dy=dy):  # the corner's horizontal velocity
+            return v[0] - (dx * ca.sin(q[2]) + dy * ca.cos(q[2])) * v[2]
+
+        contacts.append(FrictionContact(gap, slip, mu, mu_static=mu_static, name=name))
+    return mech, contacts
+
+
+def spatial_block(alpha: float, mu: float, heading: float = 0.0, m: float = 1.0) -> tuple:
+    """A block on a slope of angle ``alpha`` whose downhill direction lies at ``heading`` in the surface's
+    ``(x, z)`` axes: ``q = (x, y, z)``, ``y`` off the slope, the slip ``(ẋ, ż)``."""
+    down = (np.cos(heading), np.sin(heading))
+    mech = Lagrangian(
+        3,
+        T=lambda q, v, t: 0.5 * m * (v[0] ** 2 + v[1] ** 2 + v[2] ** 2),
+        V=lambda q, t: m * G * (-np.sin(alpha) * (down[0] * q[0] + down[1] * q[2]) + np.cos(alpha) * q[1]),
+    )
+    return mech, [FrictionContact(lambda q: q[1], lambda q, v: ca.vertcat(v[0], v[2]), mu, name="base")]
+
+
+def spatial_ball(mu: float, r: float = 0.1, m: float = 1.0) -> tuple:
+    """A uniform ball on a table: ``v = (ẋ, ẏ, ż, ω)`` (``y`` up; ``q``'s last three entries integrate ``ω``, which
+    a ball's isotropic inertia allows: nothing depends on its orientation); the contact point's slip
+    ``(ẋ + r ω_z, ż − r ω_x)``."""
+    inertia = 0.4 * m * r * r
+    mech = Lagrangian(
+        6,
+        T=lambda q, v, t: (
+            0.5 * m * (v[0] ** 2 + v[1] ** 2 + v[2] ** 2) + 0.5 * inertia * (v[3] ** 2 + v[4] ** 2 + v[5] ** 2)
+        ),
+        V=lambda q, t: m * G * q[1],
+    )
+    slip = lambda q, v: ca.vertcat(v[0] + r * v[5], v[2] - r * v[3])  # noqa: E731
+    return mech, [FrictionContact(lambda q: q[1] - r, slip, mu, name="table")]
