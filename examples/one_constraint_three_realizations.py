@@ -20,7 +20,7 @@ import numpy as np
 
 import gausspp as gp
 from gausspp import plot
-from gausspp.studies.figures import three_realizations_runs
+from gausspp.studies.figures import suslov_steady, three_realizations_runs
 
 inertia, l, n = (1.0, 2.0, 3.0), (1.0, 1.0, 1.0), (0.0, 0.0, 1.0)
 omega0, lam0, t_end = (0.0, 1.0, -1.0), 0.0, 10.0  # the flywheel starts with no spin of its own
@@ -35,7 +35,7 @@ for key, traj in runs.items():
         f"|(ω, l)| ≤ {traj.max_residual():.0e}, margin ≥ {traj.margin.min():.3f}"
     )
 
-fig = plot.three_realizations(inertia, l, n, omega0, lam0, t_end, runs=runs)
+fig = plot.three_realizations(inertia, l, n, omega0, lam0, t_end, runs=runs, steady=suslov_steady(inertia, l, omega0))
 out = sys.argv[1] if len(sys.argv) > 1 else "one_constraint_three_realizations.png"
 fig.savefig(out, dpi=110, bbox_inches="tight")
 print(f"figure (ω over time for each realization, ω in the constraint plane, energy) written to {out}")

@@ -76,3 +76,24 @@ def flag(owner: str, name: str, value: Any) -> bool:
     if not isinstance(value, (bool, np.bool_)):
         raise InputError(f"{owner}: {name} must be True or False, got {short(value)}")
     return bool(value)
+
+
+def unit_vector(scene: str, name: str, value: Any) -> np.ndarray:
+    """``value`` as a unit 3-vector, or a clear error naming the scene and the parameter."""
+    vec = array(scene, name, value).ravel()
+    if vec.shape != (3,):
+        raise ShapeError(f"{scene}: {name} must have 3 components, got {vec.size}")
+    norm = np.linalg.norm(vec)
+    if norm == 0:
+        raise InputError(f"{scene}: {name} must be a finite nonzero vector, got {vec.tolist()}")
+    return vec / norm
+
+
+def inertia_matrix(scene: str, inertia: Any) -> np.ndarray:
+    """A 3-vector of principal moments or a 3×3 tensor, as a 3×3 array (checked by the front end)."""
+    arr = array(scene, "inertia", inertia)
+    if arr.shape == (3,):
+        return np.diag(arr)
+    if arr.shape != (3, 3):
+        raise ShapeError(f"{scene}: inertia must be 3 principal moments or a 3×3 tensor, got shape {arr.shape}")
+    return arr

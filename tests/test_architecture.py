@@ -30,6 +30,7 @@ COMPUTING = (
     "gausspp.step",
     "gausspp.simulation",
     "gausspp.friction",
+    "gausspp.scenes",
     "gausspp.verification",
     "gausspp.studies",
 )

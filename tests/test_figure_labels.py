@@ -15,7 +15,7 @@ import pytest
 
 import gausspp as gp
 from gausspp import cli
-from gausspp.scenes.scene import numbered, velocity_name
+from gausspp.naming import numbered, velocity_name
 
 pytest.importorskip("matplotlib")
 import matplotlib.pyplot as plt  # noqa: E402

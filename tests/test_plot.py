@@ -21,7 +21,7 @@ from gausspp.model.derived import gaps as contact_gaps
 
 pytest.importorskip("matplotlib")
 from gausspp import plot  # noqa: E402
-from gausspp.studies.figures import skate_runs, three_realizations_runs  # noqa: E402
+from gausspp.studies.figures import skate_runs, suslov_steady, three_realizations_runs  # noqa: E402
 from gausspp.studies.realizability_map import realizability_grid  # noqa: E402
 from gausspp.studies.report import Row  # noqa: E402
 
@@ -204,7 +204,7 @@ def test_three_realizations(tmp_path: Path) -> None:
     assert min(np.linalg.norm(ends[i] - ends[j]) for i, j in [(0, 1), (0, 2), (1, 2)]) > 0.1  # three motions
     energy = {k: 0.5 * np.einsum("ti,ij,tj->t", tr.v, I, tr.v) for k, tr in runs.items()}
     assert np.ptp(energy["ideal"]) < 1e-8 and np.ptp(energy["force"]) > 0.1  # the ideal reaction does no work
-    fig = plot.three_realizations(t_end=4.0, runs=runs)
+    fig = plot.three_realizations(t_end=4.0, runs=runs, steady=suslov_steady())
     assert len(fig.axes) == 5
     for ax, key in zip(fig.axes[:3], ["ideal", "force", "inertial"], strict=True):
         assert len(ax.get_lines()) == 3  # ω₁, ω₂, ω₃
@@ -369,16 +369,22 @@ def test_contacts_draws_the_recorded_gaps(rocking_block: tuple[gp.scenes.Scene, 
 
 
 # -- plot draws, the studies compute -------------------------------------------------------------------------
-@pytest.mark.parametrize("name", sorted(plot.MOVED))
-def test_moved_names_resolve_with_a_deprecation_warning(name: str) -> None:
-    """The studies that left plot are still reachable as ``plot.<name>``, warning where they live now."""
+@pytest.mark.parametrize(
+    ("name", "home"),
+    [
+        ("realizability_grid", "gausspp.studies.realizability_map"),
+        ("servo_margin", "gausspp.studies.realizability_map"),
+        ("three_realizations_runs", "gausspp.studies.figures"),
+        ("skate_runs", "gausspp.studies.figures"),
+    ],
+)
+def test_studies_live_in_studies_not_in_plot(name: str, home: str) -> None:
+    """plot draws; the studies that compute its figures' numbers are not reachable from it."""
     import importlib
 
-    home = importlib.import_module(plot.MOVED[name])
-    with pytest.warns(DeprecationWarning, match=rf"moved to {plot.MOVED[name]}\.{name}"):
-        assert getattr(plot, name) is getattr(home, name)
-    with pytest.raises(AttributeError, match="no attribute 'nonsense'"):
-        plot.nonsense  # noqa: B018
+    assert callable(getattr(importlib.import_module(home), name))
+    with pytest.raises(AttributeError):
+        getattr(plot, name)
 
 
 def test_figures_need_their_results() -> None:
@@ -430,7 +436,7 @@ def test_two_masses_figure_announces_parameters_and_tells_motions_apart(tmp_path
 
 def test_three_realizations_title_and_limits_show_the_motions() -> None:
     runs = three_realizations_runs(t_end=4.0, samples=201)
-    fig = plot.three_realizations(t_end=4.0, runs=runs)
+    fig = plot.three_realizations(t_end=4.0, runs=runs, steady=suslov_steady())
     title = fig.get_suptitle()
     for part in ("inertia I = diag(1, 2, 3) kg·m²", "l = (0.577, 0.577, 0.577)", "n = (0, 0, 1)", "rad/s", "t = 0…4 s"):
         assert part in title

@@ -17,6 +17,7 @@ from .. import scenes
 from ..simulation import methods
 from ..simulation.inputs import DEFAULT_ATOL, DEFAULT_RTOL
 from ..step import qp
+from ..step.solvers import SOLVERS
 from ..studies.tables import one_line
 from .console import EXIT_USAGE
 
@@ -231,7 +232,7 @@ def _add_run(sub: Any, common: Parser) -> None:
     _simulation_options(r, rtol=DEFAULT_RTOL, samples=500)
     r.add_argument(
         "--solver",
-        choices=("qp", "direct"),
+        choices=SOLVERS,
         help="each step by the Gauss QP or the direct formula (default: qp; direct for cvodes)",
     )
     r.add_argument(

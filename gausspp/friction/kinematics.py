@@ -68,7 +68,7 @@ class ContactKinematics:
         self.offsets = np.concatenate([[0], np.cumsum(self.dims)]).astype(int)
         parts = [mech.A, mech.f, g, gdot, Jn, phin, s, Jt, phit, energy]
         self.sizes = [(int(x.size1()), int(x.size2())) for x in map(ca.SX, parts)]
-        # one flat output: a casadi call from Python costs ~25 µs, and each output's conversion as much again
+        # one flat output: each casadi call from Python, and each output's conversion, costs tens of microseconds
         self.fn = ca.Function("contact_state", [q, v], [ca.vertcat(*[ca.vec(ca.SX(x)) for x in parts])])
 
     def __call__(self, q: np.ndarray, v: np.ndarray) -> ContactState:

@@ -1,4 +1,4 @@
-"""``gp.from_sympy``: a ``sympy.physics.mechanics`` system as a gausspp model (issue 20).
+"""``gp.from_sympy``: a ``sympy.physics.mechanics`` system as a gausspp model.
 
 Gauss's principle needs the *unconstrained* equations ``A(q) u̇ = f(q, u, t)`` in all the speeds ``u``, with
 the constraints kept apart (their realization decides the reaction). sympy gives:

@@ -26,10 +26,9 @@ from ..errors import (
 )
 from ..step import checked, data, servo_reach
 from ..step import impact as impact_step
-from ..step.data import NO_STAB, StepData
+from ..step.data import NO_STAB, StepData, StepProblem
 from ..step.general import GaussSolution, general_step, manifold
 from ..step.kernel import Kernel
-from ..step.problem import StepProblem
 from ..step.qp import QPBackend
 from ..step.realizability import symmetric_by_construction
 from ..step.results import ImpactResult, StepResult
@@ -68,7 +67,7 @@ class Model:
         own sparsity (linear in the number of bodies for chains and trees); ``"auto"`` picks by size and
         sparsity (:func:`gausspp.step.sparse.choose_route`). The chosen one is ``model.route``.
     codegen : bool
-        Run the compiled lane's step as C (:mod:`gausspp.c_code`): about ten times faster per step, after a
+        Run the compiled lane's step as C (:mod:`gausspp.c_code`): many times faster per step, after a
         compilation of seconds for a large model, kept on disk for the next process. Without a C compiler the
         step stays in casadi's virtual machine.
 

@@ -5,7 +5,7 @@ saving and showing it are the caller's choice. A non-interactive backend (Agg) i
 is available. matplotlib is imported only when a figure is drawn. The numbers behind the figures are
 computed by the studies: :mod:`gausspp.studies.realizability_map` (:func:`realizability_grid`,
 :func:`servo_margin`) and :mod:`gausspp.studies.figures` (:func:`three_realizations_runs`,
-:func:`skate_runs`); their former names here still resolve, with a ``DeprecationWarning`` (:data:`MOVED`).
+:func:`skate_runs`).
 
 Figures (one module of this package each)
 -----------------------------------------
@@ -24,10 +24,6 @@ animate             the mechanism moving, from its scene's ``drawing``, saved as
 
 from __future__ import annotations
 
-import importlib
-import warnings
-from typing import Any
-
 from .animation import animate
 from .base import palette, pyplot
 from .friction import friction, stick_slip_map
@@ -37,15 +33,6 @@ from .margin_map import realizability_map
 from .motion import reaction_over_time, trajectory
 from .realizations import THREE_LABELS, skate, three_realizations
 from .runtime import save_work_precision, work_precision
-
-#: Names that used to live here and are studies now: name → the module that holds it.
-MOVED = {
-    "realizability_grid": "gausspp.studies.realizability_map",
-    "servo_margin": "gausspp.studies.realizability_map",
-    "RealizabilityGrid": "gausspp.studies.realizability_map",
-    "three_realizations_runs": "gausspp.studies.figures",
-    "skate_runs": "gausspp.studies.figures",
-}
 
 __all__ = [
     "THREE_LABELS",
@@ -64,20 +51,3 @@ __all__ = [
     "verification",
     "work_precision",
 ]
-
-
-def __getattr__(name: str) -> Any:
-    """A name in :data:`MOVED`, from its new module (PEP 562), with a ``DeprecationWarning``."""
-    home = MOVED.get(name)
-    if home is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    warnings.warn(
-        f"gausspp.plot.{name} is a study, not a figure: it moved to {home}.{name}; import it from there",
-        DeprecationWarning,
-        stacklevel=2,
-    )
-    return getattr(importlib.import_module(home), name)
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *MOVED])

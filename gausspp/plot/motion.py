@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ShapeError
-from ..scenes.scene import velocity_names
+from ..naming import velocity_names
 from .base import (
     MARGIN_WARN,
     MARKERS,

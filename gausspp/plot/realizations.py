@@ -8,8 +8,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from ..scenes.rigid import inertia_matrix, unit_vector
-from ..scenes.suslov import steady_rotation
+from ..validation import inertia_matrix, unit_vector
 from .base import given, palette, pyplot, suffix, vec
 
 #: Keys and legend labels of the runs of :func:`gausspp.studies.figures.three_realizations_runs`.
@@ -44,8 +43,8 @@ def _given_runs(runs: Any, figure: str, study: str, keys: Any) -> dict[str, Any]
     return {str(k): v for k, v in runs.items()}
 
 
-def _plane_panel(plane: Any, runs: Mapping[str, Any], I: np.ndarray, l: np.ndarray, n: np.ndarray) -> None:
-    """The paths of ``ω`` in the plane ``(ω, l) = 0``, the common start and Suslov's steady rotation."""
+def _plane_panel(plane: Any, runs: Mapping[str, Any], I: np.ndarray, l: np.ndarray, n: np.ndarray, steady: Any) -> None:
+    """The paths of ``ω`` in the plane ``(ω, l) = 0``, the common start and Suslov's steady rotation (if given)."""
     e1, e2 = plane_basis(I, l)
     for key, (color, ls) in THREE_STYLE.items():
         w = runs[key].v
@@ -53,8 +52,9 @@ def _plane_panel(plane: Any, runs: Mapping[str, Any], I: np.ndarray, l: np.ndarr
         plane.plot(w[-1] @ e1, w[-1] @ e2, "s", color=color, ms=6)
     w0 = runs["ideal"].v[0]
     plane.plot(w0 @ e1, w0 @ e2, "ko", ms=6, label="common start ω₀ (end: squares)")
-    w_inf = steady_rotation(I, l, w0)
-    plane.plot(w_inf @ e1, w_inf @ e2, "*", color=palette(0), ms=14, mec="k", label="Suslov's steady rotation ω∞")
+    if steady is not None:
+        w_inf = np.asarray(steady, dtype=float)
+        plane.plot(w_inf @ e1, w_inf @ e2, "*", color=palette(0), ms=14, mec="k", label="Suslov's steady rotation ω∞")
     plane.set(
         xlabel=r"$(\omega, e_1)$,  $e_1 \parallel l \times Il$",
         ylabel=r"$(\omega, e_2)$,  $e_2 = l \times e_1$",
@@ -94,13 +94,14 @@ def three_realizations(
     t_end: Any = None,
     *,
     runs: Mapping[str, Any] | None = None,
+    steady: Any = None,
 ) -> Any:
     """ "One constraint, three realizations": the same body and ``(ω, l) = 0``, three motions.
 
     Top row, one panel per realization: the body angular velocity ``ω(t)``. Bottom left: the
     three paths of ``ω`` in the constraint plane ``(ω, l) = 0`` (coordinates on ``e₁ ∥ l × Il``,
-    ``e₂ = l × e₁``), with Suslov's attracting steady rotation ``ω∞ ∥ l × Il`` (see
-    :mod:`gausspp.scenes.suslov`). Bottom right: the kinetic energy of the carrier
+    ``e₂ = l × e₁``), with Suslov's attracting steady rotation ``ω∞ ∥ l × Il`` where ``steady`` gives it.
+    Bottom right: the kinetic energy of the carrier
     ``½ (Iω, ω)``, conserved by the ideal constraint (its reaction does no work on motions that
     keep it) and changed by the servo torque and by the flywheel.
 
@@ -111,8 +112,9 @@ def three_realizations(
     omega0, lam0, t_end
         Accepted for calls with the study's parameters; not used (the runs carry ``ω₀`` and time).
     runs : mapping
-        The result of :func:`gausspp.studies.figures.three_realizations_runs` (keys as in
-        :data:`THREE_LABELS`).
+        The runs of :func:`gausspp.studies.figures.three_realizations_runs` (keys as in :data:`THREE_LABELS`).
+    steady : (3,) array, optional
+        Suslov's steady rotation ``ω∞`` (:func:`gausspp.scenes.suslov.steady_rotation`), drawn as a star.
 
     Returns
     -------
@@ -130,7 +132,7 @@ def three_realizations(
     top += [fig.add_subplot(grid[0, j], sharey=top[0]) for j in (1, 2)]
     plane, energy = fig.add_subplot(grid[1, :2]), fig.add_subplot(grid[1, 2])
     _omega_panels(top, runs, palette)
-    _plane_panel(plane, runs, I, lv, nv)
+    _plane_panel(plane, runs, I, lv, nv, steady)
     for key, (color, ls) in THREE_STYLE.items():
         w = runs[key].v
         energy.plot(runs[key].t, 0.5 * np.einsum("ti,ij,tj->t", w, I, w), ls, color=color, label=key)

@@ -58,12 +58,12 @@ GENERAL = (
     "spatial-parallelogram",
 )
 
-#: Servo scenes realized tangentially (issue 19): the one-step matrix ``J A⁻¹ Mᵀ`` is singular at every state
+#: Servo scenes realized tangentially: the one-step matrix ``J A⁻¹ Mᵀ`` is singular at every state
 #: (the actuators reach the constraint only in a higher derivative, index > 3), so no one-step route steps them:
 #: studies and tests that step or simulate every scene skip them; the servo route solves them.
 SERVO = ("overhead-crane", "spring-chain-servo")
 
-#: Robots read from URDF (issue 20): built only with the robots extra (``pip install 'gausspp[robots]'``, a
+#: Robots read from URDF: built only with the robots extra (``pip install 'gausspp[robots]'``, a
 #: project error without), each stepped by the solver in its ``params["solver"]``; studies and tests that step
 #: every scene skip them, their own tests run them.
 ROBOT = ("ur5-tool-path", "underactuated-arm")

@@ -1,4 +1,4 @@
-"""A block dropped on a floor: impacts with restitution, then resting contact (issue 7).
+"""A block dropped on a floor: impacts with restitution, then resting contact.
 
 A planar rigid block (width ``w``, height ``h``, mass ``m``, central moment of inertia
 ``m(w² + h²)/12``) with coordinates ``q = (x, z, θ)`` under gravity ``g``; its corners

@@ -1,4 +1,4 @@
-"""A pendulum that hits a wall: a bilateral rod and a unilateral contact together (issue 7).
+"""A pendulum that hits a wall: a bilateral rod and a unilateral contact together.
 
 A point mass ``m`` at ``q = (x, z)`` on a massless rod of length ``L`` (ideal holonomic
 ``rod: x² + z² − L² = 0``) under gravity ``g``, and a wall through the pivot's vertical,

@@ -1,4 +1,4 @@
-"""What each scene's parameters mean: the "Parameters" section of its builder's docstring, read (issue 30, item 5).
+"""What each scene's parameters mean: the "Parameters" section of its builder's docstring, read.
 
 Every scene documents each keyword of its ``build`` in numpydoc form, one entry a parameter::
 

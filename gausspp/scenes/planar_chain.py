@@ -1,4 +1,4 @@
-"""A planar chain of ``N`` links in maximal coordinates (issue 18): the scaling problem.
+"""A planar chain of ``N`` links in maximal coordinates: the scaling problem.
 
 Link ``i`` (``i = 1 … N``) is a rigid bar with coordinates ``(xᵢ, zᵢ, θᵢ)``: its centre of mass and
 its angle from the ``x`` axis; mass ``m``, length ``L``, central moment of inertia ``m L²/12``,

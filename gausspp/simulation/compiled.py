@@ -28,7 +28,7 @@ from . import methods as _methods
 from .drift import Stabilization, projection_function
 from .rhs import RightHandSide
 
-#: CVODES gives up after this many internal steps (≈1 s on a small model) instead of stalling.
+#: CVODES gives up after this many internal steps (seconds on a small model) instead of stalling.
 MAX_CVODES_STEPS = 100_000
 
 _RHS_OUTPUTS = [OUTPUTS.index(k) for k in ("qdot", "a", "u", "power_reaction", "power_forces")]

@@ -130,8 +130,8 @@ def _stage_function(model: Model, kernel: CompiledKernel) -> ca.Function:
     """``(t, y, stab) ↦ (y', all-clear, margin)``: the derivative of the state at one stage by the run's own step
     kernel, whether that step passed (``A`` positive definite, finite, the QP solved, the margin's bound at least
     ``margin_error``), and the margin itself in closed form for up to two rows (NaN beyond). One flat SX function
-    for the direct step; an MX graph around the QP's conic node otherwise, inlined where it is called (nested MX
-    calls cost ~1 µs each, a sixth of a QP stage)."""
+    for the direct step; an MX graph around the QP's conic node otherwise, inlined where it is called (a nested MX
+    call costs a sizeable fraction of a QP stage)."""
     nq, nv, nl, k, m = model.nq, model.nv, model.n_lam, model.k, model.m
     t, y, stab = ca.MX.sym("t"), ca.MX.sym("y", nq + nv + nl + 2), ca.MX.sym("stab", 2)
     args = [t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], stab]
@@ -144,7 +144,7 @@ def _stage_function(model: Model, kernel: CompiledKernel) -> ca.Function:
     ok = ca.logic_and(ok, bound >= model.margin_error)
     derivative = ca.vertcat(out["qdot"], out["a"], lam_dot, out["power_reaction"], out["power_forces"])
     fn = ca.Function("stage", [t, y, stab], [ca.densify(derivative), ok, margin])
-    if not kernel.function.is_a("SXFunction"):  # each stage's nodes inlined into the step's graph: ~15 % faster
+    if not kernel.function.is_a("SXFunction"):  # each stage's nodes inlined into the step's graph: faster
         return ca.Function("stage", [t, y, stab], [ca.densify(derivative), ok, margin], {"always_inline": True})
     flat = fn.expand()
     return ca.Function("stage", flat.sx_in(), ca.cse(flat.call(flat.sx_in())))

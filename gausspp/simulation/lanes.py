@@ -25,11 +25,9 @@ from dataclasses import dataclass
 
 from ..errors import GaussppError, InputError, UnknownNameError
 from ..model.model import Model
-from ..step import qp
+from ..step import qp, solvers
+from ..step.solvers import SOLVERS
 from .methods import Method
-
-#: The step solvers :func:`gausspp.simulate` knows.
-SOLVERS = ("qp", "direct")
 
 
 @dataclass(frozen=True)
@@ -200,10 +198,7 @@ def check_solver(method: Method, solver: str, backend: str | None, lane: str | N
     """The lanes that can run ``method`` with ``solver`` and ``backend``, fastest first (only ``lane`` if one is
     named): the rules that hold for every kind of model (checked before the state). Refused when no lane that
     runs smooth models can take them, with the fastest one's reason."""
-    if solver not in SOLVERS:
-        raise UnknownNameError(f"solver={solver!r} is unknown; use {' or '.join(map(repr, SOLVERS))}")
-    if solver == "direct" and backend is not None:
-        raise InputError(f"backend={backend!r} applies to solver='qp' only")
+    solvers.check_solver(solver, backend)
     running = _named(method, lane)
     refusals = {one.name: _refusal(one, method, solver, backend) for one in running}
     if all(refusals.values()):  # no kind of model could run: the reason of the fastest lane for smooth models

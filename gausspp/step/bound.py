@@ -1,9 +1,9 @@
 """Compiled casadi functions called from Python at C speed: numpy arrays bound to their inputs and outputs.
 
-A plain casadi call from Python costs ≈15–25 µs of argument handling; a buffer-bound call
-(``Function.buffer()``) costs ≈0.15 µs. :class:`Bound` binds numpy arrays to a function's inputs and
-outputs once, so a call is: copy the inputs in, one C call, read the outputs. And the helpers that shape
-the functions bound here: :func:`dense_outputs`, :func:`only_outputs`, :func:`sparse_output`.
+A plain casadi call from Python costs tens of microseconds of argument handling; a buffer-bound call
+(``Function.buffer()``) costs well under one. :class:`Bound` binds numpy arrays to a function's inputs
+and outputs once, so a call is: copy the inputs in, one C call, read the outputs. And the helpers that
+shape the functions bound here: :func:`dense_outputs`, :func:`only_outputs`, :func:`sparse_output`.
 """
 
 from __future__ import annotations

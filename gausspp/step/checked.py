@@ -15,20 +15,19 @@ import casadi as ca
 import numpy as np
 
 from ..disk_cache import cached_function
-from ..errors import GaussppError, InputError, QPSolveError, RealizabilityError, UnknownNameError
+from ..errors import GaussppError, InputError, QPSolveError, RealizabilityError
 from ..workspace import workspace
 from . import qp
 from .checked_call import CheckedCall
-from .data import NO_STAB, evaluate
+from .data import NO_STAB, StepProblem, evaluate
 from .general import general_step
 from .general.general_step import solve_at
 from .kernel import CompiledKernel, Kernel, build_kernel
 from .outcome import Where, evaluation_failed, to_result, warn_small_margin
-from .problem import StepProblem
 from .protocol import StepModel
 from .results import StepResult
+from .solvers import SOLVERS, check_solver  # noqa: F401  (SOLVERS: the names model.py reads from here)
 
-SOLVERS = ("qp", "direct")
 DIRECT_NEEDS_INDEPENDENT_ROWS = (
     " (solver='direct' needs independent rows; solver='qp' returns the unique acceleration "
     "and the least-norm multiplier when the rows are redundant)"
@@ -42,15 +41,12 @@ def backend_name(backend: str | qp.QPBackend | None) -> str | None:
 
 def kernel_for(model: StepModel, solver: str, backend: str | qp.QPBackend | None, refine: bool) -> Kernel:
     """The compiled step of ``model`` for ``solver`` (and QP ``backend``), built on first use and kept."""
-    if solver not in SOLVERS:
-        raise UnknownNameError(f"solver={solver!r} is unknown; use one of {list(SOLVERS)}")
+    check_solver(solver, backend)
     if model.contacts or model.bounded:
         raise InputError(
             "this model has unilateral contacts or bounded actuators: its step is the general Gauss QP, "
             "solved from Python (model.step(..., solver='qp')), not a compiled kernel"
         )
-    if solver == "direct" and backend is not None:
-        raise InputError(f"backend={backend!r} applies to solver='qp' only")
     if model.k == 0:  # the free mechanism: no row, no QP — the step is the free acceleration, by either solver
         solver, backend = "direct", None
     chosen = qp.get(backend) if solver == "qp" else None

@@ -1,7 +1,7 @@
 """A step's data as numbers at one instant: :class:`StepProblem` and :class:`StepData`.
 
 :class:`StepProblem` is ``A, f, r₀, J, φ, D, Φ`` of docs/theory.md §2: what :meth:`Model.step_data`
-returns, what :func:`gausspp.step.problem.solve` takes, and what the diagnosis of a failed step
+returns, what :func:`gausspp.step.solve_numbers.solve` takes, and what the diagnosis of a failed step
 (:mod:`gausspp.step.outcome`) reads. :class:`StepData` is everything the general step, the projection
 onto the constraints and the impact law read at a state ``(t, q, v, λ)`` with Baumgarte terms
 ``stab = (α, β)``: the step, the constraint values ``Φ`` and ``g``, the kinematics ``q̇``, the energy and

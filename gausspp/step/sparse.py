@@ -29,8 +29,8 @@ from .expressions import StepExpressions, step_outputs
 
 ROUTES = ("auto", "dense", "sparse")
 
-#: ``route="auto"`` takes the sparse route from this many constraint rows on (measured on the planar chain,
-#: ``benchmarks/scaling.py``: at 8 rows — four links — the sparse direct step is already ≈ 3 × faster; below
+#: ``route="auto"`` takes the sparse route from this many constraint rows on (at 8 rows — four links — the
+#: sparse direct step is already clearly faster on the planar chain, ``benchmarks/scaling.py`` prints it; below
 #: it the dense route's whitening keeps its robustness to a badly conditioned ``A`` at no cost that matters).
 SPARSE_FROM_ROWS = 8
 

@@ -23,7 +23,7 @@ from ..step import general as general_step
 from ..step.qp import qpsolvers_route
 from ..verification.crosscheck import crosscheck
 from ..verification.verify import verify
-from .figures import skate_runs, skate_title, three_realizations_runs
+from .figures import skate_runs, skate_title, suslov_steady, three_realizations_runs
 from .realizability_map import realizability_grid
 
 #: The one-step cases: the two masses with a rod and with a servo, the rigid body with Suslov's and a servo's axis.
@@ -41,8 +41,8 @@ STEPS = {"stiff-chain": 20_000, "andrews": 4_000}
 #: side is a Gauss QP solved from Python): the four-bar's redundant rows are there from the start; the crane
 #: runs with the weaker motor of :data:`GENERAL_PARAMS`, which saturates before t = 1; the parallelogram (A02) stops
 #: before its first collinear position (t ≈ 0.708), where its pin rows drop rank.
-#: The general-QP rows' tolerance (each right-hand side is a QP solved from Python, ≈ 1 ms: 1e-10 rather than
-#: 1e-11 takes a quarter fewer steps, and keeps the two backends' gap far below the table's 1e-8 claims).
+#: The general-QP rows' tolerance (each right-hand side is a QP solved from Python, costly: 1e-10 rather than
+#: 1e-11 takes fewer steps, and keeps the two backends' gap far below the table's 1e-8 claims).
 GENERAL_RTOL = 1e-10
 
 GENERAL_T_END = {
@@ -206,8 +206,8 @@ def scene_rows() -> Iterator[SceneRow]:
 def backends() -> Backends:
     """The general QP's default backend (casadi's qrqp, compiled into the step) and one to compare it with: ProxQP
     when installed (a proximal augmented Lagrangian method against an active set), else OSQP — none when that is
-    the default itself. (OSQP at the tolerances of these rows cost 2.4 × daqp: measured on the saturated crane,
-    4.7 s against 2.0 s, ProxQP 2.0 s, before the general step was compiled.)"""
+    the default itself. (ProxQP before OSQP: at these rows' tolerances OSQP, iterative, is the slower;
+    ``benchmarks/general_qp.py`` prints OSQP's time per QP beside daqp's.)"""
     first = general_step.default_backend()
     second = "proxqp" if "proxqp" in qpsolvers_route.available() else "osqp"
     return Backends(first, None if first in ("osqp", second) else second)
@@ -312,7 +312,9 @@ def figure(out: Path, name: str) -> Path:
     draw = {
         "two_masses.png": two_masses_figure,
         "realizability_map.png": lambda: plot.realizability_map(realizability_grid()),
-        "three_realizations.png": lambda: plot.three_realizations(runs=three_realizations_runs()),
+        "three_realizations.png": lambda: plot.three_realizations(
+            runs=three_realizations_runs(), steady=suslov_steady()
+        ),
         "skate.png": lambda: plot.skate(runs=skate_runs(), title=skate_title()),
     }[name]
     fig = draw()

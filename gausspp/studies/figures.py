@@ -12,6 +12,7 @@ import numpy as np
 
 from .. import scenes
 from ..scenes import Scene
+from ..scenes.suslov import steady_rotation
 from ..simulation.simulate import simulate
 from ..simulation.trajectory import Trajectory
 
@@ -69,6 +70,12 @@ def three_realizations_runs(
     }
     times = np.linspace(0.0, float(t_end), int(samples))
     return {key: tight_run(built[key], times) for key in THREE_KEYS}
+
+
+def suslov_steady(inertia: Any = (1.0, 2.0, 3.0), l: Any = (1.0, 1.0, 1.0), omega0: Any = (0.0, 1.0, -1.0)) -> Any:
+    """Suslov's steady rotation ``ω∞`` that the ideal run of :func:`three_realizations_runs` tends to (its
+    figure's star: :func:`gausspp.plot.three_realizations`'s ``steady``)."""
+    return steady_rotation(inertia, l, omega0)
 
 
 def skate_runs(

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError, ShapeError
-from ..scenes.rigid import inertia_matrix, unit_vector
+from ..validation import inertia_matrix, unit_vector
 
 #: The name quoted in the messages of this study's errors.
 _OWNER = "realizability_grid"

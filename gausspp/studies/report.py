@@ -1,4 +1,4 @@
-"""Error against run time (work-precision) and the QP error floor (issue 5; DiffEqDevTools-style).
+"""Error against run time (work-precision) and the QP error floor (DiffEqDevTools-style).
 
 :func:`work_precision` runs the study of :mod:`gausspp.studies.work_precision` in this process (for
 each scene, each method over a sweep of ``dt`` or ``rtol`` and each step solver, scored against the

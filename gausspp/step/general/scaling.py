@@ -74,8 +74,8 @@ def scaled(p: GaussProblem) -> Scaled:
     """Factor ``A``, normalize rows and columns and bring the problem to unit size; names bad data."""
     L = _factor(p)
     m = p.D.shape[1]
-    # L⁻¹ [D, Jᵀ] in one LAPACK general solve (on small matrices scipy's triangular solve was measured 100×
-    # slower on a loaded machine, through BLAS threading)
+    # L⁻¹ [D, Jᵀ] in one LAPACK general solve (on small matrices scipy's triangular solve can be far slower on a
+    # loaded machine, through BLAS threading)
     X = dense.solve(L, np.hstack([p.D, p.J.T]))
     W, Jt = X[:, :m], X[:, m:].T  # L⁻¹ D and J L⁻ᵀ
     norms = np.sqrt(np.einsum("ij,ij->i", Jt, Jt))

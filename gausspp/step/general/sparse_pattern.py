@@ -42,16 +42,16 @@ from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
 
-#: From this many bilateral rows on, a pattern that can take this route takes it. Measured, ``model.step`` sparse
-#: against dense: the double parallelogram (12 rows) 20 against 65 µs, the ladder of two cells (22) 27 against
-#: 158 µs, the spatial double parallelogram (30) 67 against 447 µs (``benchmarks/general_step.py`` for more).
+#: From this many bilateral rows on, a pattern that can take this route takes it: on the double parallelogram
+#: (12 rows) and larger, ``model.step`` is several times faster sparse than dense, the more so the more rows
+#: (``benchmarks/general_step.py`` prints the figures).
 SPARSE_FROM_ROWS = 8
 #: ... and when ``A`` has at most this fraction of its entries.
 SPARSE_DENSITY = 0.5
 #: Up to this many dropped rows the multipliers are the least-norm split over all rows, as on the dense pattern;
 #: beyond, the kept rows carry the reaction and the dropped rows' are 0. The split costs one solve per dropped row
-#: and a product of their size: measured on the ladder, ``model.step`` 43 → 59 µs with 4 dropped rows, 65 → 140 µs
-#: with 8 and 115 → 476 µs with 16 (``benchmarks/general_step.py``).
+#: and a product of their size, a cost that grows faster than the step's own with the number of dropped rows
+#: (``benchmarks/general_step.py`` prints the ladder's figures).
 LEAST_NORM_ROWS = 8
 #: The fixed seed of the random combination of the dropped rows.
 COMBINATION_SEED = 20261125

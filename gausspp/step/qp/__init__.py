@@ -16,14 +16,14 @@ installed here is a :class:`~gausspp.errors.BackendUnavailableError` — never a
 
 Defaults, one per form, declared here (:func:`default`):
 
-* the compiled step: :data:`DEFAULT`, ``casadi:qrqp`` — measured fastest among the round-off-accurate
-  backends (``benchmarks/step.py``: ≈1.5 µs per QP step, agreement with the direct solution at 1e-15);
-  OSQP, the core dependency, is always available but iterative (≈13 µs, accurate only after polishing);
+* the compiled step: :data:`DEFAULT`, ``casadi:qrqp`` — the fastest among the round-off-accurate
+  backends, agreeing with the direct solution to round-off (``benchmarks/step.py`` prints the figures);
+  OSQP, the core dependency, is always available but iterative (slower, accurate only after polishing);
 * the general QP: the first installed of :data:`GENERAL_DEFAULTS`, ``casadi:qrqp`` (always there: casadi's own
   active set, round-off accurate), then ``qpsolvers:daqp`` and ``qpsolvers:osqp``. qrqp is the one that sits
   inside the compiled general step (:mod:`gausspp.step.general.compiled`: one C call per step, the QP in the
   graph); the Python route that decides redundancy and diagnoses a failed step solves its stages with the same
-  backend. daqp, OSQP and qrqp agree to ≤ 1.2e-15 on ``benchmarks/general_qp.py``'s cases;
+  backend. daqp, OSQP and qrqp agree to round-off on ``benchmarks/general_qp.py``'s cases;
 * the cross-check's independent reference: the first installed of :data:`REFERENCE_DEFAULTS`.
 """
 

@@ -1,7 +1,7 @@
 """The qpsolvers route: any QP solver installed in Python, by name.
 
 qpsolvers sets a solver up anew on every call, so this route pays the set-up each step
-(tens of µs); it is here for reach (every solver qpsolvers knows), not for speed. It solves
+(tens of microseconds); it is here for reach (every solver qpsolvers knows), not for speed. It solves
 both forms (:mod:`.base`): the equality form of the step and the general form of the stages,
 through ``qpsolvers.solve_problem``.
 """
@@ -30,7 +30,7 @@ OPTIONS: dict[str, dict[str, Any]] = {
     "piqp": {"eps_abs": 1e-12, "eps_rel": 1e-12},
     "daqp": {"primal_tol": 1e-12, "dual_tol": 1e-12},
 }
-#: Solvers that print to the C-level stdout (silenced around their calls; that costs tens of µs).
+#: Solvers that print to the C-level stdout (silenced around their calls; that costs tens of microseconds).
 CHATTY = ("osqp", "qpoases", "highs")
 #: A point the solver itself calls inaccurate is accepted only if it is optimal to this (the problems are unit-sized).
 INACCURATE_KKT_TOL = 1e-10

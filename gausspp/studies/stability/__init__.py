@@ -1,4 +1,4 @@
-"""The stability study (docs/theory.md §6.6, issue 5 item 3): each hard case, what the library does, and a verdict.
+"""The stability study (docs/theory.md §6.6): each hard case, what the library does, and a verdict.
 
 Every case runs the library as a user would, measures what it does (with numbers) and compares
 it with what is *right*. A verdict ✗ means the library does something wrong there; the case's

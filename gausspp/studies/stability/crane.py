@@ -156,7 +156,7 @@ def _runs(quick: bool, fall: scenes.Scene) -> list[tuple[str, Model, str, dict[s
         ("rk4-compiled dt=1e-3", fall.model, "rk4-compiled", dict(dt=1e-3)),
         ("cvodes", fall.model, "cvodes", {}),
     ]
-    if not quick:  # DOP853 at the default margin_error grinds ≈ 16000 steps into t* (2–4 s)
+    if not quick:  # DOP853 at the default margin_error grinds many thousands of steps into t* (seconds)
         runs.insert(1, ("DOP853", fall.model, "DOP853", dict(rtol=1e-9, atol=1e-12)))
         runs += [
             ("rk4-compiled dt=1e-5", fall.model, "rk4-compiled", dict(dt=1e-5)),

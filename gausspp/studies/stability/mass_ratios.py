@@ -10,7 +10,7 @@ import numpy as np
 from ... import scenes
 from ...errors import GaussppError
 from ...model.model import Model
-from ...step.problem import StepProblem
+from ...step.data import StepProblem
 from .common import EPS, Case, Solver, fmt, realizability_warnings, recorded, relative, solvers
 
 NAME = "mass ratios"

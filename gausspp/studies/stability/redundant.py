@@ -1,13 +1,12 @@
 """Redundant constraints: rank-deficient constraint Jacobians, on and off the constraint manifold.
 
-Issue 7 and issue 15: ``solver='direct'`` needs independent rows and stops with a
-RealizabilityError saying the rows are redundant and pointing to ``solver='qp'``. ``solver='qp'``
-decides which rows are redundant at the nearest state on the constraint manifold
-(:mod:`gausspp.step.general.redundancy`: rows kept in declared order) and solves the step at the actual state
-with the kept rows — the minimal model's rows. So every QP backend returns the minimal model's
-acceleration, on the manifold (with the least-norm multiplier) and off it (the rows there are
-independent by the drift only), and a RealizabilityError ("contradict each other") when the
-dependent rows describe different constraints.
+``solver='direct'`` needs independent rows and stops with a RealizabilityError saying the rows are
+redundant and pointing to ``solver='qp'``. ``solver='qp'`` decides which rows are redundant at the
+nearest state on the constraint manifold (:mod:`gausspp.step.general.redundancy`: rows kept in
+declared order) and solves the step at the actual state with the kept rows — the minimal model's
+rows. So every QP backend returns the minimal model's acceleration, on the manifold (with the
+least-norm multiplier) and off it (the rows there are independent by the drift only), and a
+RealizabilityError ("contradict each other") when the dependent rows describe different constraints.
 """
 
 from __future__ import annotations

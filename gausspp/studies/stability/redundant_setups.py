@@ -31,7 +31,7 @@ EXACT_TOL = 1e-10
 OFF_FLOOR, OFF_PER_DRIFT = 1e-12, 2.0
 #: Largest relative difference of a simulated trajectory (solver='qp') from the minimal model's.
 SIMULATE_TOL = 1e-8
-#: Drifts of the scan over the angles (formerly the edge of the general QP's rank tolerance).
+#: Drifts of the scan over the angles.
 SCAN_DRIFTS = (1e-8, 2e-8, 3e-8)
 #: What solver='direct' adds to its error when the rows are redundant.
 QP_ADVICE = "solver='qp' returns the unique acceleration and the least-norm multiplier"

@@ -1,9 +1,8 @@
-"""A step's data as numbers, and solving it without a model.
+"""Solving a step given as numbers, without a model: :func:`solve`.
 
-:class:`StepProblem` holds ``A, f, r₀, J, φ, D`` of docs/theory.md §2 at one instant. It is what
-:meth:`Model.step_data` returns and what :func:`solve` takes, so users (and the property
-tests) can pose a step from matrices they already have. :func:`solve` compiles one kernel
-per shape and solver, the same code a model's step runs.
+It takes a :class:`~gausspp.step.data.StepProblem` (``A, f, r₀, J, φ, D`` of docs/theory.md §2 at one instant,
+what :meth:`Model.step_data` returns), so users (and the property tests) can pose a step from matrices they
+already have. It compiles one kernel per shape and solver, the same code a model's step runs.
 """
 
 from __future__ import annotations
@@ -12,7 +11,6 @@ import functools
 
 import casadi as ca
 
-from ..errors import InputError
 from . import qp
 from .data import StepProblem
 from .expressions import StepExpressions
@@ -20,6 +18,7 @@ from .kernel import Kernel, build_kernel
 from .outcome import Where, evaluation_failed, to_result
 from .protocol import Group
 from .results import StepResult
+from .solvers import check_solver
 
 __all__ = ["StepProblem", "solve"]
 
@@ -45,8 +44,7 @@ def solve(
     Same checks and result as :meth:`Model.step`; constraint rows are named ``row i``.
     """
     n, k, m = problem.shape
-    if solver not in ("qp", "direct"):
-        raise InputError(f"solver={solver!r} is unknown; use 'qp' or 'direct'")
+    check_solver(solver, backend)
     name = qp.get(backend).name if solver == "qp" else None
     kernel = _kernel(n, k, m, solver, name)
     p = problem
