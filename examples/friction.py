@@ -6,11 +6,12 @@ it slides, the surface's reaction leans back by the friction angle: ``N J_nᵀ �
 realization of the contact; while it sticks, the slip is a constraint and the friction force any value in the
 cone ``|F| ≤ μ_s N``. ``gp.simulate_friction`` integrates event by event (stick, slip, lift-off, impact) and every
 number below is compared with its closed form.
-Run: python examples/friction.py [output.png]  (the stick/slip map is written beside it)
+Run: python examples/friction.py [output.png [ball.gif]]  (the stick/slip map is written beside the figure)
 """
 
 import sys
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -21,6 +22,7 @@ from gausspp.friction import scenes
 G = scenes.G
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "friction.png")
 map_out = out.with_name(f"{out.stem}_stick_slip_map.png")  # beside the first figure
+gif = sys.argv[2] if len(sys.argv) > 2 else None  # the ball sliding, then rolling
 
 # -- a block on a slope: sticks for μ ≥ tan α, else slides with g(sin α − μ cos α)
 mu = 0.5
@@ -80,3 +82,9 @@ print(f"\nstick/slip map: {slides.size} blocks, {wrong} verdicts off the closed 
 plot.friction(runs, slips).savefig(out, dpi=110)
 plot.stick_slip_map(alphas, mus, slides).savefig(map_out, dpi=110)
 print(f"figures written: {out}, {map_out}")
+
+# -- the ball, animated: the spoke turns slower than it rolls while it slides; the rim point traces a cycloid after
+ball = SimpleNamespace(name="ball thrown without spin: slides, then rolls", drawing=scenes.round_body_drawing(0.1))
+if gif is not None:
+    plot.animate(ball, runs["ball"], out=gif, frames=90)
+    print(f"animation written: {gif}")

@@ -32,6 +32,7 @@ ANIMATED = (
     "bouncing_block",
     "redundant_four_bar",
     "one_constraint_three_realizations",
+    "friction",
 )
 
 

@@ -207,6 +207,8 @@ def test_bad_coefficients_are_refused(kwargs: dict, match: str) -> None:
 
 def test_bad_calls_are_refused() -> None:
     mech, contacts = incline(0.3, 0.5)
+    with pytest.raises(gp.InputError, match="gp.simulate_friction"):
+        gp.Model(mech, contacts)  # a frictional contact in a model's constraints: pointed to its entry point
     with pytest.raises(gp.ShapeError, match="q0 needs 2"):
         gp.simulate_friction(mech, contacts, [0.0], [0.0, 0.0], 1.0)
     with pytest.raises(gp.NonFiniteError):

@@ -4,6 +4,8 @@ corners. Spatial (a two-component slip): a block on a slope and a ball on a tabl
 
 from __future__ import annotations
 
+from typing import Any
+
 import casadi as ca
 import numpy as np
 
@@ -96,3 +98,23 @@ def spatial_ball(mu: float, r: float = 0.1, m: float = 1.0) -> tuple:
     )
     slip = lambda q, v: ca.vertcat(v[0] + r * v[5], v[2] - r * v[3])  # noqa: E731
     return mech, [FrictionContact(lambda q: q[1] - r, slip, mu, name="table")]
+
+
+def round_body_drawing(r: float = 0.1, floor: tuple[float, float] = (-0.2, 1.8)) -> Any:
+    """What :func:`gausspp.plot.animate` draws of :func:`round_body` at ``q = (x, y, θ)``: the rim, a spoke at
+    ``θ`` (sliding shows as the spoke lagging the roll), the floor, and the way of the centre and of a rim point
+    (a cycloid once it rolls)."""
+    angles = np.linspace(0.0, 2 * np.pi, 25)
+
+    def draw(q: np.ndarray) -> dict[str, Any]:
+        x, y, th = (float(c) for c in q[:3])
+        rim = np.c_[x + r * np.cos(angles), y + r * np.sin(angles)]
+        mark = np.array([x + r * np.cos(th), y + r * np.sin(th)])
+        return {
+            "segments": [(rim[i], rim[i + 1]) for i in range(len(angles) - 1)] + [((x, y), tuple(mark))],
+            "points": [(x, y)],
+            "trace": [(x, y), tuple(mark)],
+            "ground": [((floor[0], 0.0), (floor[1], 0.0))],
+        }
+
+    return draw

@@ -360,6 +360,11 @@ def _constraint_list(constraints: Constraint | Sequence[Constraint]) -> list[Con
             ) from None
     constraints = list(constraints)
     for c in constraints:
+        if type(c).__name__ == "FrictionContact":  # gausspp.friction sits above the model layer: named, not imported
+            raise InputError(
+                "a FrictionContact is not a model constraint: simulate the mechanism with its frictional contacts by "
+                "gp.simulate_friction(mechanism, [contacts], q0, v0, t_end)"
+            )
         if not isinstance(c, Constraint):
             raise InputError(f"constraints must be Constraint, Holonomic or Unilateral objects, got {type(c).__name__}")
     return constraints
