@@ -107,13 +107,18 @@ def levels(graph: dict[str, set[str]]) -> dict[str, int]:
     return {m: level(comp_of[m]) for m in graph}
 
 
+#: Loader methods the import system hands a module to fill: writing its attributes is their contract.
+IMPORT_PROTOCOL = ("exec_module",)
+
+
 def foreign_writes(root: Path) -> list[str]:
     """Places where a module writes attributes into an object it was handed (``file:line what``).
 
     Flags every use of ``__dict__``, every ``setattr(...)`` and ``object.__setattr__(...)`` whose target is
     not ``self``, and every assignment to an attribute of a function's parameter other than ``self``/``cls``
-    (except an exception's ``args``, re-worded before it is raised again). Objects a function creates itself
-    may be configured freely.
+    (except an exception's ``args``, re-worded before it is raised again, and an import loader's
+    ``exec_module``, whose module is handed to it to fill). Objects a function creates itself may be configured
+    freely.
     """
     found = []
     for path in sorted(root.rglob("*.py")):
@@ -129,7 +134,7 @@ def foreign_writes(root: Path) -> list[str]:
                     target = node.args[0]
                     if not (isinstance(target, ast.Name) and target.id == "self"):
                         found.append(f"{rel}:{node.lineno} {name}")
-            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and node.name not in IMPORT_PROTOCOL:
                 params = {a.arg for a in (*node.args.posonlyargs, *node.args.args, *node.args.kwonlyargs)}
                 params -= {"self", "cls"}
                 for sub in ast.walk(node):

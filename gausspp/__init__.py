@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import importlib as _importlib
 import importlib.abc as _abc
-import importlib.util as _util
+import importlib.machinery as _machinery
 import sys as _sys
 from typing import TYPE_CHECKING, Any
 
@@ -239,15 +239,18 @@ class _ShortPaths(_abc.MetaPathFinder, _abc.Loader):
 
     def find_spec(self, fullname: str, path: Any = None, target: Any = None) -> Any:
         short = fullname.removeprefix(f"{__name__}.")
-        if fullname == f"{__name__}.{short}" and _MODULES.get(short, fullname) != fullname:
-            return _util.spec_from_loader(fullname, self)
-        return None
+        if fullname != f"{__name__}.{short}" or _MODULES.get(short, fullname) == fullname:
+            return None
+        module = _importlib.import_module(_MODULES[short])
+        return _machinery.ModuleSpec(fullname, self, loader_state=(module, module.__spec__))
 
     def create_module(self, spec: Any) -> Any:
-        return _importlib.import_module(_MODULES[spec.name.removeprefix(f"{__name__}.")])
+        return spec.loader_state[0]
 
     def exec_module(self, module: Any) -> None:
-        """Nothing to run: the module was imported under its own name."""
+        """Nothing to run: the module was imported under its own name. The import system has just given it the
+        short name's spec; it gets its own back (its relative imports resolve from where it lives)."""
+        module.__spec__ = module.__spec__.loader_state[1]
 
 
 if not any(isinstance(finder, _ShortPaths) for finder in _sys.meta_path):

@@ -7,6 +7,8 @@ first shown to catch a deliberately broken package written to a temporary direct
 from __future__ import annotations
 
 import importlib.util
+import subprocess
+import sys
 import textwrap
 from pathlib import Path
 
@@ -193,3 +195,20 @@ def test_the_namespace_holds_the_public_names_and_subpackages_only() -> None:
     assert leaked == []
     raised = {n for n, c in inspect.getmembers(errors, inspect.isclass) if issubclass(c, Exception | Warning)}
     assert raised - set(gausspp.__all__) == set()
+
+
+def test_short_module_paths_give_the_modules_themselves() -> None:
+    """``import gausspp.qp`` (and the other short paths) gives the module that lives deeper, unchanged: the same
+    object, its own spec (so its relative imports resolve without an ImportWarning), in a fresh interpreter."""
+    code = (
+        "import importlib, sys, warnings; warnings.simplefilter('error')\n"
+        "import gausspp\n"
+        "for short, full in gausspp._MODULES.items():\n"
+        "    m = importlib.import_module('gausspp.' + short)\n"
+        "    assert m is importlib.import_module(full) and m.__spec__.name == full, (short, m.__spec__.name)\n"
+        "from gausspp.sweeps import grid\n"
+        "gausspp.sweeps.sweep  # noqa\n"
+        "print('ok')\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-2000:]
