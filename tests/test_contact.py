@@ -201,9 +201,7 @@ def test_unilateral_and_contact_simulation_input_errors() -> None:
 def test_a_contact_run_that_fails_keeps_what_it_computed() -> None:
     model = _ball(1.0)  # elastic: never comes to rest, events pile up
     with pytest.raises(gp.IntegrationError, match="contact events") as info:
-        from gausspp.simulation.events import simulate_contacts
-
-        simulate_contacts(model, [0.0, 1.0], [0.0, 0.0], 10.0, max_events=3)
+        gp.simulate(model, [0.0, 1.0], [0.0, 0.0], 10.0, max_events=3)
     traj = info.value.trajectory  # type: ignore[attr-defined]
     assert traj.status == "failed" and traj.t[-1] > 0.4 and len(traj.events) == 4
 

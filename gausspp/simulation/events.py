@@ -28,54 +28,15 @@ import numpy as np
 from ..errors import GaussppError, InitialDataError, IntegrationError
 from ..model.model import Model
 from . import compiled_adaptive, lanes, recording
-from . import methods as _methods
 from .contacts import active_set, gaps, phase_step
 from .drift import Stabilization, as_stabilization
 from .event_watch import PhaseWatch, StepDense
 from .initial import check_on_constraint, initial_state
-from .inputs import DEFAULT_ATOL, DEFAULT_RTOL, Options, check_options
+from .inputs import Options
 from .rhs import RightHandSide, step_control_atol
 from .samples import Samples
 from .tolerance import within_tolerance
 from .trajectory import Trajectory
-
-#: Largest number of events (impacts, lift-offs) in one run before it is stopped as Zeno-like.
-MAX_EVENTS = 10_000
-
-
-def simulate_contacts(
-    model: Model,
-    q0: Any,
-    v0: Any,
-    t_end: float,
-    *,
-    t0: float = 0.0,
-    lam0: Any = None,
-    dt: float | None = None,
-    method: str | _methods.Method = "DOP853",
-    solver: str = "direct",
-    backend: str | None = None,
-    stabilize: Any = None,
-    rtol: float = DEFAULT_RTOL,
-    atol: float = DEFAULT_ATOL,
-    constraint_tol: float = 1e-8,
-    throw: bool = True,
-    rest_speed: float = 1e-6,
-    max_events: int = MAX_EVENTS,
-    record: Any = 1,
-) -> Trajectory:
-    """Integrate a model with unilateral contacts (see the module docstring); ``gp.simulate`` runs this lane.
-
-    Only adaptive scipy methods (RK45, DOP853, Radau, BDF) can locate events; ``dt`` caps their step.
-    ``record``: every accepted step (a number), or an array of times (from the dense output); the
-    states just before and after each impact are always recorded.
-    Phases with active contacts are solved by ``solver``; the decisions (active set, impacts) by the
-    general Gauss QP with ``backend`` when it names a qpsolvers solver.
-    """
-    opts = check_options(
-        model, method, t0, t_end, dt, solver, backend, rtol, atol, record, constraint_tol, throw, rest_speed, max_events
-    )
-    return run_contacts(model, q0, v0, lam0, stabilize, opts)
 
 
 def run_contacts(model: Model, q0: Any, v0: Any, lam0: Any, stabilize: Any, opts: Options) -> Trajectory:

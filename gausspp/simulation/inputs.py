@@ -61,8 +61,9 @@ class Options:
     lanes: tuple[lanes.Lane, ...] = ()
 
 
-def check_options(  # the arguments of gp.simulate, in its order
+def check_options(  # the arguments of gp.simulate, by name
     model: Model,
+    *,
     method: str | _methods.Method | None,
     t0: Any,
     t_end: Any,
