@@ -27,6 +27,7 @@ from . import lanes
 from . import methods as _methods
 from .drift import Stabilization, projection_function
 from .rhs import RightHandSide
+from .samples import Samples
 
 #: CVODES gives up after this many internal steps (seconds on a small model) instead of stalling.
 MAX_CVODES_STEPS = 100_000
@@ -308,3 +309,12 @@ def cvodes_run(
     evaluations = int(stats.get("nfevals", 0)) if isinstance(stats, dict) else 0
     Y = np.vstack([y0[None, :], xf])
     return grid, Y, steps, None, evaluations, None
+
+
+def run_compiled(job: lanes.Job) -> Samples:
+    """The compiled and cvodes lanes' runner: the whole run as one casadi graph (:func:`integrate_compiled`)."""
+    o = job.opts
+    t, y, steps, failure, evaluations, solutions = integrate_compiled(
+        o.method, job.model, o.solver, o.backend, job.stab, o.t0, o.t_end, o.dt, job.y0, o.rtol, o.atol, o.record
+    )
+    return Samples(t, y, steps, evaluations, failure, o.method.name, job.rhs.solver, qp_solutions=solutions)

@@ -22,9 +22,8 @@ from ..step.general import general_step
 from ..step.general.solve import CONSISTENCY_TOL
 from . import methods as _methods
 from .compiled import CVODES, cvodes_run
-from .drift import Stabilization
-from .inputs import Options
 from .integrate import run_scipy
+from .lanes import Job
 from .rhs import GeneralRightHandSide
 from .samples import Samples
 
@@ -59,21 +58,22 @@ def _rhs_function(
     return ca.Function("general_rhs", [t, y, s], [ca.if_else(flag > 0.5, ydot, np.nan)])
 
 
-def run_general_cvodes(
-    rhs: GeneralRightHandSide, model: Model, stab: Stabilization, opts: Options, y0: np.ndarray
-) -> Samples:
-    """CVODES on the compiled general step, then DOP853 from where it stopped (module docstring)."""
+def run_general_cvodes(job: Job) -> Samples:
+    """The cvodes-general lane's runner: CVODES on the compiled general step, then DOP853 from where it stopped
+    (module docstring)."""
+    rhs, model, stab, opts, y0 = job.rhs, job.model, job.stab, job.opts, job.y0
     o = opts
     F = _rhs_function(model, rhs, o.t0, y0, differentiated=CVODES[o.method.name] == "bdf")
     continuation = replace(o, method=_methods.get(CONTINUATION), dt=None)
     if F is None:
-        return run_scipy(rhs, continuation, y0)
+        return run_scipy(replace(job, opts=continuation))
     t, Y, steps, failure, evaluations, _ = cvodes_run(
         o.method.name, F, stab, o.t0, o.t_end, o.dt, y0, o.rtol, o.atol, o.record
     )
     if failure is None:
         return Samples(t, Y, steps, evaluations + rhs.evaluations, None, o.method.name, rhs.solver)
-    rest = run_scipy(rhs, replace(continuation, t0=float(t[-1]), record=_later(o.record, float(t[-1]))), Y[-1])
+    later = replace(continuation, t0=float(t[-1]), record=_later(o.record, float(t[-1])))
+    rest = run_scipy(replace(job, opts=later, y0=Y[-1]))
     keep = rest.t > t[-1]
     return Samples(
         np.concatenate([t, rest.t[keep]]),

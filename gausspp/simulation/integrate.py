@@ -18,18 +18,17 @@ from ..workspace import workspace
 from . import compiled_adaptive, crossing, inputs
 from . import methods as _methods
 from .compiled import rhs_function
-from .drift import Stabilization
 from .initial import Projection, projection
-from .inputs import Options
+from .lanes import Job
 from .progress import Progress
 from .rhs import AnyRightHandSide, step_control_atol
 from .samples import Samples
 
 
-def run_python(
-    rhs: AnyRightHandSide, model: Model, stab: Stabilization, opts: Options, y0: np.ndarray, redundant: bool
-) -> Samples:
-    """Fixed steps (RK tableau or symplectic Euler) from Python; keeps the recorded steps."""
+def run_python(job: Job) -> Samples:
+    """The python lane's runner: fixed steps (RK tableau or symplectic Euler) from Python; keeps the recorded
+    steps."""
+    rhs, model, stab, opts, y0, redundant = job.rhs, job.model, job.stab, job.opts, job.y0, job.redundant
     meth, t0, t_end, dt = opts.method, opts.t0, opts.t_end, opts.dt
     assert dt is not None  # checked for fixed-step methods
     n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
@@ -102,10 +101,11 @@ def keep_indices(n_steps: int, t0: float, dt: float, record: Any) -> np.ndarray:
     return np.unique(idx)
 
 
-def run_scipy(rhs: AnyRightHandSide, opts: Options, y0: np.ndarray) -> Samples:
-    """A scipy ``OdeSolver`` stepped to ``t_end``; keeps every accepted step, or the ``record`` times. A model whose
-    ideal rows may lose rank is watched, and its singular positions are stepped over
-    (:mod:`gausspp.simulation.crossing`): the solver starts again on the far side."""
+def run_scipy(job: Job) -> Samples:
+    """The scipy lane's runner: a scipy ``OdeSolver`` stepped to ``t_end``; keeps every accepted step, or the
+    ``record`` times. A model whose ideal rows may lose rank is watched, and its singular positions are stepped
+    over (:mod:`gausspp.simulation.crossing`): the solver starts again on the far side."""
+    rhs, opts, y0 = job.rhs, job.opts, job.y0
     meth, t0, model = opts.method, opts.t0, rhs.model
     redundant = not rhs.margin_checked  # the general QP's rows dependent at the start
     options: dict[str, Any] = {"rtol": opts.rtol, "atol": step_control_atol(opts.atol, y0.size)}

@@ -21,7 +21,9 @@ in :mod:`gausspp.simulation.simulate`'s dispatch table.
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
+from typing import Any
 
 from ..errors import GaussppError, InputError, UnknownNameError
 from ..model.model import Model
@@ -47,8 +49,25 @@ class Kind:
 
 
 @dataclass(frozen=True)
+class Job:
+    """What a lane runs: the step ``rhs`` of ``model`` with the drift control ``stab``, the checked options
+    ``opts``, the initial state ``y0 = (q, v, λ, W_R, W_F)`` and whether the rows are ``redundant`` there."""
+
+    rhs: Any
+    model: Any
+    stab: Any
+    opts: Any
+    y0: Any
+    redundant: bool = False
+
+
+@dataclass(frozen=True)
 class Lane:
-    """An integrator lane and what it can take."""
+    """An integrator lane, what it can take, and its runner.
+
+    A new lane is one row of :data:`LANES` and one function ``runner(job: Job) -> Samples``: the runner is that
+    function, or ``"module:function"`` of :mod:`gausspp.simulation` (imported when the lane first runs: the
+    runners import this table)."""
 
     name: str
     #: How it runs, as a message names it ("method 'x' runs ...").
@@ -67,6 +86,16 @@ class Lane:
     progress: bool = False
     #: It keeps the state of every step (not only the recorded ones).
     keeps_every_step: bool = False
+    #: ``runner(job) -> Samples``, or its ``"module:function"`` in :mod:`gausspp.simulation`.
+    runner: Any = ""
+
+    def run(self, job: Job) -> Any:
+        """The lane's samples of ``job`` (:class:`~gausspp.simulation.samples.Samples`)."""
+        runner = self.runner
+        if isinstance(runner, str):
+            module, _, name = runner.partition(":")
+            runner = getattr(importlib.import_module(f"{__package__}.{module}"), name)
+        return runner(job)
 
 
 SMOOTH, GENERAL, CONTACTS = "smooth", "general", "contacts"
@@ -107,6 +136,7 @@ LANES: dict[str, Lane] = {
             SOLVERS,
             qp_in_graph=True,
             keeps_every_step=True,
+            runner="compiled:run_compiled",
         ),
         Lane(
             "cvodes",
@@ -118,6 +148,7 @@ LANES: dict[str, Lane] = {
             qp_in_graph=True,
             project=False,
             no_project_reason="it cannot project between its internal steps",
+            runner="compiled:run_compiled",
         ),
         Lane(
             "cvodes-general",
@@ -130,6 +161,7 @@ LANES: dict[str, Lane] = {
             qp_in_graph=True,
             project=False,
             no_project_reason="it cannot project between its internal steps",
+            runner="general_cvodes:run_general_cvodes",
         ),
         Lane(
             "python",
@@ -138,8 +170,9 @@ LANES: dict[str, Lane] = {
             (SMOOTH, GENERAL),
             SOLVERS,
             progress=True,
+            runner="integrate:run_python",
         ),
-        Lane("scipy", "scipy's OdeSolver", _SCIPY, (SMOOTH, GENERAL), SOLVERS),
+        Lane("scipy", "scipy's OdeSolver", _SCIPY, (SMOOTH, GENERAL), SOLVERS, runner="integrate:run_scipy"),
         Lane(
             "events",
             "event-driven phases",

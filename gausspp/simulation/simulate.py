@@ -23,13 +23,10 @@ from ..step import servo_reach
 from ..step.outcome import QP_TOLERANCE
 from . import lanes, recording, servo_lane
 from . import methods as _methods
-from .compiled import integrate_compiled
 from .drift import Baumgarte, Stabilization, as_stabilization
 from .events import run_contacts
-from .general_cvodes import run_general_cvodes
 from .initial import check_on_constraint, initial_state, project_initial, redundant_rows
 from .inputs import DEFAULT_ATOL, DEFAULT_RTOL, Options, check_options
-from .integrate import run_python, run_scipy
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
 from .tolerance import within_tolerance
@@ -149,7 +146,7 @@ def simulate(
     except RealizabilityError as exc:  # a servo reached only through higher derivatives: point to its route
         raise servo_reach.explain(model, exc, opts.t0, q0, v0) from None
     rhs = _right_hand_side(model, opts, stab, redundant)
-    samples = _run(chosen, rhs, model, stab, opts, y0, redundant)
+    samples = _run(chosen, lanes.Job(rhs, model, stab, opts, y0, redundant))
     return _servo_advice(
         model,
         opts.t0,
@@ -220,35 +217,14 @@ def _right_hand_side(model: Model, opts: Options, stab: Stabilization, redundant
     return RightHandSide(model, opts.solver, opts.backend, stab)
 
 
-def _run(
-    lane: lanes.Lane,
-    rhs: AnyRightHandSide,
-    model: Model,
-    stab: Stabilization,
-    opts: Options,
-    y0: np.ndarray,
-    redundant: bool,
-) -> Samples:
-    """Run ``lane``; a failure before the first step keeps the initial state."""
-    runners: dict[str, Callable[[], Samples]] = {
-        "python": lambda: run_python(rhs, model, stab, opts, y0, redundant),
-        "scipy": lambda: run_scipy(rhs, opts, y0),
-        "compiled": lambda: _run_compiled(rhs, model, stab, opts, y0),
-        "cvodes": lambda: _run_compiled(rhs, model, stab, opts, y0),
-        "cvodes-general": lambda: run_general_cvodes(rhs, model, stab, opts, y0),  # type: ignore[arg-type]
-    }
+def _run(lane: lanes.Lane, job: lanes.Job) -> Samples:
+    """Run ``lane`` (its runner, :attr:`~gausspp.simulation.lanes.Lane.run`); a failure before the first step keeps
+    the initial state."""
     try:
-        return runners[lane.name]()
+        return lane.run(job)
     except GaussppError as exc:  # failed before the first step could be kept
-        return Samples(np.array([opts.t0]), y0[None, :], 0, rhs.evaluations, exc, opts.method.name, rhs.solver)
-
-
-def _run_compiled(rhs: AnyRightHandSide, model: Model, stab: Stabilization, opts: Options, y0: np.ndarray) -> Samples:
-    o = opts
-    t, y, steps, failure, evaluations, solutions = integrate_compiled(
-        o.method, model, o.solver, o.backend, stab, o.t0, o.t_end, o.dt, y0, o.rtol, o.atol, o.record
-    )
-    return Samples(t, y, steps, evaluations, failure, o.method.name, rhs.solver, qp_solutions=solutions)
+        o = job.opts
+        return Samples(np.array([o.t0]), job.y0[None, :], 0, job.rhs.evaluations, exc, o.method.name, job.rhs.solver)
 
 
 __all__ = ["QP_TOLERANCE", "simulate"]
