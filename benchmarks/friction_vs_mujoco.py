@@ -30,13 +30,13 @@ per run (section 3): gausspp integrates adaptively in Python, so its per-step fi
 from __future__ import annotations
 
 import argparse
-import importlib
 import math
 from dataclasses import dataclass
 from types import ModuleType
 from typing import Any
 
 import numpy as np
+from _optional import peer
 from _timing import best_ms, best_us
 
 import gausspp as gp
@@ -67,15 +67,6 @@ class Row:
     steps: int = 0
     slide_us: float = math.nan  # per step, sliding (gausspp: per recorded sample)
     rest_us: float = math.nan  # per step, resting
-
-
-def peer(name: str) -> ModuleType | None:
-    """The module, or ``None`` (and a line saying so) when it is not installed."""
-    try:
-        return importlib.import_module(name)
-    except ImportError:
-        print(f"{name} is not installed (pip install gausspp[peers]): its rows are skipped")
-        return None
 
 
 # ----------------------------------------------------------------------------------------------- gausspp

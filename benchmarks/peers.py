@@ -33,7 +33,6 @@ The ratios printed last are those issue 17's acceptance names.
 from __future__ import annotations
 
 import argparse
-import importlib
 import math
 import warnings
 from collections.abc import Callable
@@ -43,6 +42,7 @@ from typing import Any
 
 import numpy as np
 from _figures import headless_pyplot
+from _optional import peer
 from _timing import best_us
 
 import gausspp as gp
@@ -64,15 +64,6 @@ class Row:
     @property
     def error(self) -> float:
         return max(self.error_q, self.error_v)
-
-
-def peer(name: str) -> ModuleType | None:
-    """The module, or ``None`` (and a line saying so) when it is not installed."""
-    try:
-        return importlib.import_module(name)
-    except ImportError:
-        print(f"{name} is not installed (pip install gausspp[peers]): its rows are skipped")
-        return None
 
 
 def state_error(scene: gp.scenes.Scene, t: float, q: np.ndarray, v: np.ndarray) -> tuple[float, float]:

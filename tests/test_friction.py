@@ -4,6 +4,7 @@ solution."""
 
 from __future__ import annotations
 
+import casadi as ca
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -217,6 +218,15 @@ def test_bad_calls_are_refused() -> None:
         gp.simulate_friction(mech, [], [0.0, 0.0], [0.0, 0.0], 1.0)
     with pytest.raises(gp.InputError, match="t_end"):
         gp.simulate_friction(mech, contacts, [0.0, 0.0], [0.0, 0.0], -1.0)
+    with pytest.raises(gp.InitialDataError, match="penetrate the contact 'base'"):
+        gp.simulate_friction(mech, contacts, [0.0, -0.1], [0.0, 0.0], 1.0)
+    for T in (lambda q, v, t: 0.5 * (v[1] ** 2 - v[0] ** 2), lambda q, v, t: 0.5 * v[1] ** 2):
+        wrong = gp.Lagrangian(2, T=T, V=lambda q, t: G * q[1])  # indefinite, singular
+        with pytest.raises(gp.NotPositiveDefiniteError, match=r"not positive definite at t=0: eigenvalues"):
+            gp.simulate_friction(wrong, contacts, [0.0, 0.0], [0.0, 0.0], 1.0)
+    nan_gap = [gp.FrictionContact(lambda q: ca.sqrt(q[1] - 1.0), lambda q, v: v[0], 0.5, name="root")]
+    with pytest.raises(gp.NonFiniteError, match="contact 'root'.*not finite at t=0"):
+        gp.simulate_friction(mech, nan_gap, [0.0, 0.0], [0.0, 0.0], 1.0)
     with pytest.raises(gp.InputError, match="linear in the velocities"):
         gp.simulate_friction(mech, [gp.FrictionContact(lambda q: q[1], lambda q, v: v[0] ** 2, 0.5)], [0, 0], [0, 0], 1)
 

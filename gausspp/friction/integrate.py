@@ -17,9 +17,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..errors import GaussppError, InputError, IntegrationError, ShapeError
+from ..errors import GaussppError, InitialDataError, InputError, IntegrationError, ShapeError
 from ..model.mechanism import Mechanism
 from ..model.model import Model
+from ..step.outcome import not_positive_definite
 from ..validation import array, positive
 from .contact import FrictionContact
 from .kinematics import ContactKinematics, ContactState
@@ -64,6 +65,7 @@ class _Runner:
         self.kin = ContactKinematics(mechanism, contacts)
         self.nq, self.nv = self.kin.nq, self.kin.nv
         self.qdot = ca.Function("qdot", [mechanism.q, mechanism.v], [mechanism.qdot])
+        self.names = [c.name for c in contacts]
 
     # -- one state --------------------------------------------------------------------------------------------
     def split(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -79,7 +81,10 @@ class _Runner:
                 size = np.linalg.norm(st.s[i])
                 if size > SLIP_FLOOR * (1.0 + np.abs(v).max()):
                     dirs[i] = st.s[i] / size
-        x0 = np.linalg.solve(st.A, st.f)
+        try:
+            x0 = np.linalg.solve(st.A, st.f)
+        except np.linalg.LinAlgError:  # a configuration where the mass matrix is singular, between samples
+            raise not_positive_definite(st, float("nan")) from None
         sol = solve(st, self.contacts, Modes(modes.kinds, tuple(dirs)), x0, st.phin, st.phit)
         if sol is None:
             raise IntegrationError("the contact rows became dependent: the modes cannot be kept")
@@ -131,7 +136,7 @@ class _Runner:
     ) -> tuple[Modes, np.ndarray, Solution]:
         """The modes from the state ``(q, v)`` (after an impact if a contact closes approaching); a contact whose
         event ``fired`` may not keep the mode that event ended (it sits on that mode's boundary)."""
-        st = self.kin(q, v)
+        st = self.kin.checked(q, v, t, self.names)
         size = 1.0 + np.abs(q).max(initial=0.0)
         speed = 1.0 + np.abs(v).max(initial=0.0)
         touching = [i for i in range(len(self.contacts)) if st.g[i] <= CONTACT_TOL * size]
@@ -207,6 +212,13 @@ def simulate_friction(
     t = 0.0
     failure: Exception | None = None
     try:
+        gaps = runner.kin.checked(q, v, t, runner.names).g
+        if np.any(gaps < -CONTACT_TOL * (1.0 + np.abs(q).max())):
+            i = int(np.argmin(gaps))
+            raise InitialDataError(
+                f"initial data penetrate the contact {contacts[i].name!r} at t=0: g = {gaps[i]:.3g} < 0; start with "
+                "every gap g ≥ 0"
+            )
         modes, v, _ = runner.modes_at(t, q, v)
         y = np.concatenate([q, v])
         while t < t_end:
@@ -232,7 +244,7 @@ def simulate_friction(
             else:
                 seg_t, seg_y = list(sol.t), list(sol.y.T)
             for ti, yi in zip(seg_t, seg_y, strict=True):
-                st = runner.kin(*runner.split(yi))
+                st = runner.kin.checked(*runner.split(yi), ti, runner.names)
                 acc = runner.accel(st, modes, runner.split(yi)[1])
                 ts.append(ti), ys.append(yi), mode_rows.append(modes.names()), Ns.append(acc.N)
                 Fs.append(np.concatenate(acc.F)), energies.append(st.energy)

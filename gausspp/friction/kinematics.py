@@ -15,9 +15,10 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, NonFiniteError
 from ..model.mechanism import Mechanism
 from ..model.symbolic import evaluate
+from ..step.outcome import not_positive_definite
 from .contact import FrictionContact
 
 
@@ -91,3 +92,25 @@ class ContactKinematics:
             phit=[phit[o[i] : o[i + 1]] for i in range(c)],
             energy=float(out[9][0, 0]),
         )
+
+    def checked(self, q: np.ndarray, v: np.ndarray, t: float, names: list[str]) -> ContactState:
+        """The state at ``(q, v)``, refused with a project error where it cannot be stepped: a quantity that is not
+        finite (naming the contact ``names[i]`` and the time) or a mass matrix not symmetric positive definite."""
+        st = self(q, v)
+        for what, value in (("the mass matrix A", st.A), ("the forces f", st.f)):
+            if not np.all(np.isfinite(value)):
+                raise NonFiniteError(f"{what} is not finite at t={t:.6g}; check the mechanism's formulas there")
+        for i, name in enumerate(names):
+            parts = (st.g[i], st.gdot[i], st.Jn[i], st.phin[i], st.s[i], st.Jt[i], st.phit[i])
+            if not all(np.all(np.isfinite(x)) for x in parts):
+                raise NonFiniteError(
+                    f"contact {name!r}: its gap or slip (or their derivatives) is not finite at t={t:.6g}; check "
+                    "its formulas there"
+                )
+        try:
+            np.linalg.cholesky(st.A)
+        except np.linalg.LinAlgError:
+            raise not_positive_definite(st, t) from None
+        if np.abs(st.A - st.A.T).max() > 1e-12 * np.abs(st.A).max():
+            raise not_positive_definite(st, t)
+        return st

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from .base import palette, pyplot
+from .base import STYLES, palette, pyplot
 
 
 def friction(runs: Mapping[str, Any], slips: Mapping[str, np.ndarray]) -> Any:
@@ -21,7 +21,7 @@ def friction(runs: Mapping[str, Any], slips: Mapping[str, np.ndarray]) -> Any:
         slip = np.asarray(slips[label])
         for j, name in enumerate(run.contact_names):
             tag = f"{label} · {name}" if len(run.contact_names) > 1 else label
-            axes[0].plot(run.t, slip[:, j], color=color, ls=("-", "--", ":", "-.")[j % 4], label=tag)
+            axes[0].plot(run.t, slip[:, j], color=color, ls=STYLES[j % len(STYLES)], label=tag)
             axes[1].plot(run.t, run.N[:, j], color=color, ls="-", label=f"N {tag}")
             axes[1].plot(run.t, run.F[:, j], color=color, ls="--", label=f"F {tag}")
         for ev in run.events:

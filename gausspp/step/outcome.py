@@ -9,6 +9,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -55,7 +56,8 @@ def _check_data(data: StepProblem, t: float, groups: Sequence[Group]) -> None:
             raise NonFiniteError(f"constraint {g.name!r}: the reaction directions D are not finite {_where(t)}")
 
 
-def _not_positive_definite(data: StepProblem, t: float) -> NotPositiveDefiniteError:
+def not_positive_definite(data: Any, t: float) -> NotPositiveDefiniteError:
+    """The error for ``data.A`` (any object with the mass matrix ``A``) not symmetric positive definite at ``t``."""
     A = data.A
     asym = np.max(np.abs(A - A.T)) / max(np.max(np.abs(A)), 1e-300)
     if asym > 1e-12:
@@ -110,7 +112,7 @@ def evaluation_failed(exc: RuntimeError, where: Where, *, margin_error: float) -
     d = where.data()
     _check_data(d, t, groups)
     if not np.all(np.linalg.eigvalsh(0.5 * (d.A + d.A.T)) > 0) or not np.allclose(d.A, d.A.T, rtol=1e-12, atol=0):
-        return _not_positive_definite(d, t)
+        return not_positive_definite(d, t)
     whole = realizability_margin(d.A, d.J, d.D)
     if whole < margin_error:
         return _unrealizable(d, t, whole, groups, margin_error)
@@ -126,7 +128,7 @@ def to_result(out: dict[str, np.ndarray], where: Where, *, margin_warn: float, m
         d = data()
         _check_data(d, t, groups)
         if not (pivot > 0):
-            raise _not_positive_definite(d, t)
+            raise not_positive_definite(d, t)
     S_norm = out["S_norm"]
     k, m = S_norm.shape if S_norm.ndim == 2 else (S_norm.size, 1)
     cos = np.zeros(min(k, m)) if not finite and not np.isfinite(S_norm.sum()) else singular_values(S_norm, k, m)
