@@ -8,6 +8,7 @@ friction cone, the independent check of the direct solution (:mod:`.modes`).
 
 from .contact import FrictionContact
 from .gauss_qp import gauss_qp_step
-from .integrate import FrictionRun, simulate_friction
+from .integrate import simulate_friction
+from .run import FrictionRun
 
 __all__ = ["FrictionContact", "FrictionRun", "gauss_qp_step", "simulate_friction"]

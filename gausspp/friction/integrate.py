@@ -11,7 +11,6 @@ normal velocity, Coulomb's law on the impulses: :func:`impact`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
@@ -21,42 +20,19 @@ from ..errors import GaussppError, InitialDataError, InputError, IntegrationErro
 from ..model.mechanism import Mechanism
 from ..model.model import Model
 from ..step.outcome import not_positive_definite
-from ..validation import array, positive
+from ..validation import array, flag, positive
+from ..workspace import workspace
 from .contact import FrictionContact
+from .fixed_step import Phases, run_phase
 from .kinematics import ContactKinematics, ContactState
 from .modes import OPEN, SLIDE, STICK, Modes, Solution, check_painleve, choose, solve
+from .phase_graph import SLIP_FLOOR
+from .run import FrictionRun, Record
 
 #: Relative tolerance of "on the contact" and "not slipping" at an event, and of the laws' inequalities.
 CONTACT_TOL = 1e-8
 #: The laws' inequalities (``N ≥ 0``, ``|F| ≤ μ_s N``, ``g̈ ≥ 0``) hold to this, relative to the forces' scale.
 LAW_TOL = 1e-12
-#: A two-component slip below this (relative to the velocities' size) slides along the phase's first direction.
-SLIP_FLOOR = 1e-7
-
-
-@dataclass
-class FrictionRun:
-    """A frictional motion: samples ``t, q, v``; per sample the contact ``modes``, normal forces ``N`` (one
-    column per contact) and friction forces ``F`` (one column per slip component, contacts in order) and the
-    ``energy``; the ``events`` (time, kind, contact);
-    ``status`` ``"success"`` or ``"failed"`` with the ``message`` and the ``failure`` (what was computed is kept)."""
-
-    t: np.ndarray
-    q: np.ndarray
-    v: np.ndarray
-    modes: list[tuple[str, ...]]
-    N: np.ndarray
-    F: np.ndarray
-    energy: np.ndarray
-    contact_names: tuple[str, ...]
-    events: list[dict[str, Any]] = field(default_factory=list)
-    status: str = "success"
-    message: str = ""
-    failure: Exception | None = None
-
-    @property
-    def success(self) -> bool:
-        return self.status == "success"
 
 
 class _Runner:
@@ -66,6 +42,7 @@ class _Runner:
         self.nq, self.nv = self.kin.nq, self.kin.nv
         self.qdot = ca.Function("qdot", [mechanism.q, mechanism.v], [mechanism.qdot])
         self.names = [c.name for c in contacts]
+        self.phases = Phases(self)
 
     # -- one state --------------------------------------------------------------------------------------------
     def split(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -79,8 +56,8 @@ class _Runner:
         for i, kind in enumerate(modes.kinds):
             if kind == SLIDE and st.s[i].size > 1:
                 size = np.linalg.norm(st.s[i])
-                if size > SLIP_FLOOR * (1.0 + np.abs(v).max()):
-                    dirs[i] = st.s[i] / size
+                if size > SLIP_FLOOR * (1.0 + np.abs(v).max()):  # continued past the phase's end, not flipped
+                    dirs[i] = (1.0 if modes.dirs[i] @ st.s[i] >= 0 else -1.0) * st.s[i] / size
         try:
             x0 = np.linalg.solve(st.A, st.f)
         except np.linalg.LinAlgError:  # a configuration where the mass matrix is singular, between samples
@@ -177,6 +154,8 @@ def simulate_friction(
     v0: Any,
     t_end: float,
     *,
+    step: float | None = None,
+    codegen: bool = False,
     rtol: float = 1e-10,
     atol: float = 1e-12,
     max_events: int = 1000,
@@ -186,10 +165,14 @@ def simulate_friction(
     """Simulate ``system`` (a mechanism, or a model without constraints) with frictional ``contacts`` from
     ``(q0, v0)`` to ``t_end`` (module docstring). Raises :class:`~gausspp.PainleveError` where sliding makes
     the contact problem inconsistent; a failure midway keeps what was computed (``.run``, or the returned run
-    marked failed with ``throw=False``). ``record``: increasing times to sample at (besides the events);
-    default every step the integrator takes."""
-    from scipy.integrate import solve_ivp  # imported here: ``import gausspp`` does not load scipy's integrators
+    marked failed with ``throw=False``).
 
+    ``step``: ``None`` (default) integrates each phase adaptively (DOP853, Radau; ``rtol``, ``atol``); a number
+    ``h`` takes RK4 steps of ``h`` compiled into one casadi graph per phase, each event located exactly inside its
+    step (:mod:`.fixed_step`: a time-stepping cost per step, the events kept); with ``codegen=True`` each phase's
+    steps run as C where a compiler is (:mod:`gausspp.c_code`: built once per phase, kept on disk).
+    ``record``: increasing times to
+    sample at (besides the events); default every step the integrator takes."""
     mech = system.mechanism if isinstance(system, Model) else system
     if isinstance(system, Model) and system.k:
         raise InputError("simulate_friction takes a mechanism (or a model without constraint rows)")
@@ -198,84 +181,128 @@ def simulate_friction(
     contacts = list(contacts)
     if not contacts or not all(isinstance(c, FrictionContact) for c in contacts):
         raise InputError("contacts must be a non-empty list of gp.FrictionContact")
-    runner = _Runner(mech, contacts)
+    key = ("friction-runner", *((c, c.gap, c.slip, c.mu, c.mu_static, c.restitution) for c in contacts))
+    runner = workspace(mech).get(key, lambda: _Runner(mech, contacts))  # its compiled phases kept for the next run
     q = array("simulate_friction", "q0", q0).ravel()
     v = array("simulate_friction", "v0", v0).ravel()
     if q.size != runner.nq or v.size != runner.nv:
         raise ShapeError(f"simulate_friction: q0 needs {runner.nq} entries and v0 {runner.nv}, got {q.size}, {v.size}")
     t_end = float(positive("t_end", t_end))
     rtol, atol = float(positive("rtol", rtol)), float(positive("atol", atol))
+    h = None if step is None else float(positive("step", step))
+    codegen = flag("simulate_friction", "codegen", codegen)
     times = None if record is None else array("simulate_friction", "record", record).ravel()
     if times is not None and (np.any(np.diff(times) <= 0) or times.size == 0):
         raise InputError("simulate_friction: record must be increasing times")
-    ts, ys, mode_rows, Ns, Fs, energies, events = [], [], [], [], [], [], []
-    t = 0.0
+    rec = Record(runner.nq, runner.nv, len(contacts), int(sum(runner.kin.dims)))
+    events: list[dict[str, Any]] = []
     failure: Exception | None = None
     try:
-        gaps = runner.kin.checked(q, v, t, runner.names).g
+        gaps = runner.kin.checked(q, v, 0.0, runner.names).g
         if np.any(gaps < -CONTACT_TOL * (1.0 + np.abs(q).max())):
             i = int(np.argmin(gaps))
             raise InitialDataError(
                 f"initial data penetrate the contact {contacts[i].name!r} at t=0: g = {gaps[i]:.3g} < 0; start with "
                 "every gap g ≥ 0"
             )
-        modes, v, _ = runner.modes_at(t, q, v)
-        y = np.concatenate([q, v])
-        while t < t_end:
-            check_painleve(runner.kin(*runner.split(y)), contacts, modes, t)
-            watched = runner.events(modes)
-            sol = solve_ivp(
-                runner.rhs(modes),
-                (t, t_end),
-                y,
-                method=runner.method(modes),
-                rtol=rtol,
-                atol=atol,
-                events=watched,
-                t_eval=None if times is None else np.append(times[(times > t) & (times < t_end)], t_end),
-            )
-            if sol.status == -1:
-                raise IntegrationError(f"the integrator failed at t={sol.t[-1]:.6g}: {sol.message}")
-            ends = [(te[0], ye[0]) for te, ye in zip(sol.t_events, sol.y_events, strict=True) if te.size]
-            if times is not None:  # the phase's start, the sampled times, then the event's state
-                seg_t, seg_y = [t, *sol.t], [y, *sol.y.T]
-                if ends:
-                    seg_t.append(ends[0][0]), seg_y.append(ends[0][1])
-            else:
-                seg_t, seg_y = list(sol.t), list(sol.y.T)
-            for ti, yi in zip(seg_t, seg_y, strict=True):
-                st = runner.kin.checked(*runner.split(yi), ti, runner.names)
-                acc = runner.accel(st, modes, runner.split(yi)[1])
-                ts.append(ti), ys.append(yi), mode_rows.append(modes.names()), Ns.append(acc.N)
-                Fs.append(np.concatenate(acc.F)), energies.append(st.energy)
-            t, y = float(seg_t[-1]), np.asarray(seg_y[-1])
-            if sol.status == 0:
-                break
-            fired = [ev.what for ev, te in zip(watched, sol.t_events, strict=True) if te.size]
-            if len(events) >= max_events:
-                raise IntegrationError(f"more than max_events={max_events} contact events by t={t:.6g}")
-            q, v = runner.split(y)
-            modes, v, _ = runner.modes_at(t, q, v, tuple(fired))
-            y = np.concatenate([q, v])
-            for kind, i in fired:
-                events.append({"t": t, "kind": kind, "contact": contacts[i].name, "modes": modes.names()})
+        if h is None:
+            _adaptive(runner, q, v, t_end, rtol, atol, times, max_events, rec, events)
+        else:
+            _fixed_step(runner, q, v, t_end, h, codegen, times, max_events, rec, events)
     except GaussppError as exc:
         failure = exc
-    Y = np.array(ys) if ys else np.zeros((0, runner.nq + runner.nv))
-    run = FrictionRun(
-        t=np.array(ts),
-        q=Y[:, : runner.nq],
-        v=Y[:, runner.nq :],
-        modes=mode_rows,
-        N=np.array(Ns).reshape(-1, len(contacts)),
-        F=np.array(Fs).reshape(-1, int(sum(runner.kin.dims))),
-        energy=np.array(energies),
-        contact_names=tuple(c.name for c in contacts),
-        events=events,
-    )
+    run = rec.run(tuple(c.name for c in contacts), events)
     if failure is not None:
         run.status, run.message, run.failure = "failed", f"{type(failure).__name__}: {failure}", failure
         if throw:
             failure.run = run  # type: ignore[attr-defined]
             raise failure
     return run
+
+
+def _next_modes(
+    runner: _Runner, t: float, y: np.ndarray, fired: list[tuple[str, int]], max_events: int, events: list
+) -> tuple[Modes, np.ndarray]:
+    """The modes after the events ``fired`` at ``(t, y)`` (and the velocity after an impact), the events logged."""
+    if len(events) >= max_events:
+        raise IntegrationError(f"more than max_events={max_events} contact events by t={t:.6g}")
+    q, v = runner.split(y)
+    modes, v, _ = runner.modes_at(t, q, v, tuple(fired))
+    for kind, i in fired:
+        events.append({"t": t, "kind": kind, "contact": runner.names[i], "modes": modes.names()})
+    return modes, np.concatenate([q, v])
+
+
+def _fixed_step(
+    runner: _Runner,
+    q: np.ndarray,
+    v: np.ndarray,
+    t_end: float,
+    h: float,
+    codegen: bool,
+    times: Any,
+    max_events: int,
+    rec: Record,
+    events: list,
+) -> None:
+    """Phases of compiled RK4 steps of ``h`` (:func:`.fixed_step.run_phase`), event to event."""
+    phases = runner.phases
+    modes, v, _ = runner.modes_at(0.0, q, v)
+    t, y = 0.0, np.concatenate([q, v])
+    while True:
+        t, y, fired = run_phase(phases, modes, t, y, t_end, h, times, rec, codegen=codegen)
+        if not fired:
+            return
+        modes, y = _next_modes(runner, t, y, fired, max_events, events)
+
+
+def _adaptive(
+    runner: _Runner,
+    q: np.ndarray,
+    v: np.ndarray,
+    t_end: float,
+    rtol: float,
+    atol: float,
+    times: Any,
+    max_events: int,
+    rec: Record,
+    events: list,
+) -> None:
+    """Phases integrated by scipy (DOP853, or Radau where a two-component slip slides), event to event."""
+    from scipy.integrate import solve_ivp  # imported here: ``import gausspp`` does not load scipy's integrators
+
+    t = 0.0
+    modes, v, _ = runner.modes_at(t, q, v)
+    y = np.concatenate([q, v])
+    while t < t_end:
+        check_painleve(runner.kin(*runner.split(y)), runner.contacts, modes, t)
+        watched = runner.events(modes)
+        sol = solve_ivp(
+            runner.rhs(modes),
+            (t, t_end),
+            y,
+            method=runner.method(modes),
+            rtol=rtol,
+            atol=atol,
+            events=watched,
+            t_eval=None if times is None else np.append(times[(times > t) & (times < t_end)], t_end),
+        )
+        if sol.status == -1:
+            raise IntegrationError(f"the integrator failed at t={sol.t[-1]:.6g}: {sol.message}")
+        ends = [(te[0], ye[0]) for te, ye in zip(sol.t_events, sol.y_events, strict=True) if te.size]
+        if times is not None:  # the phase's start, the sampled times, then the event's state
+            seg_t, seg_y = [t, *sol.t], [y, *sol.y.T]
+            if ends:
+                seg_t.append(ends[0][0]), seg_y.append(ends[0][1])
+        else:
+            seg_t, seg_y = list(sol.t), list(sol.y.T)
+        names = modes.names()
+        for ti, yi in zip(seg_t, seg_y, strict=True):
+            st = runner.kin.checked(*runner.split(yi), ti, runner.names)
+            acc = runner.accel(st, modes, runner.split(yi)[1])
+            rec.add(ti, yi, names, acc.N, np.concatenate(acc.F), st.energy)
+        t, y = float(seg_t[-1]), np.asarray(seg_y[-1])
+        if sol.status == 0:
+            return
+        fired = [ev.what for ev, te in zip(watched, sol.t_events, strict=True) if te.size]
+        modes, y = _next_modes(runner, t, y, fired, max_events, events)

@@ -57,17 +57,20 @@ class ContactKinematics:
             slips.append(slip)
         g, s = ca.vertcat(*gaps), ca.vertcat(*slips)
         qdot = mech.qdot
-        gdot = ca.jacobian(g, q) @ qdot
+        gdot = ca.jtimes(g, q, qdot)  # directional derivatives (forward mode): a fraction of the full Jacobians' size
         Jn, Jt = ca.jacobian(gdot, v), ca.jacobian(s, v)
-        if ca.depends_on(Jt, v) or ca.depends_on(ca.jacobian(gdot, v), v):
+        if ca.depends_on(Jt, v) or ca.depends_on(Jn, v):
             raise InputError("a contact's slip must be linear in the velocities v")
-        phin = -(ca.jacobian(Jn @ v, q) @ qdot)
-        phit = -(ca.jacobian(Jt @ v, q) @ qdot)
+        phin = -ca.jtimes(gdot, q, qdot)  # ġ = J_n v and s = J_t v: ∂(J v)/∂q · q̇ with v held
+        phit = -ca.jtimes(s, q, qdot)
         energy = mech.energy if mech.energy is not None else ca.SX(np.nan)
         self.c, self.nq, self.nv = len(contacts), mech.q.numel(), mech.v.numel()
         self.dims = tuple(int(x.numel()) for x in slips)
         self.offsets = np.concatenate([[0], np.cumsum(self.dims)]).astype(int)
         parts = [mech.A, mech.f, g, gdot, Jn, phin, s, Jt, phit, energy]
+        #: the same quantities as casadi expressions of ``(q, v)`` (for the compiled phases, :mod:`.phase_graph`)
+        self.symbols = dict(zip(("A", "f", "g", "gdot", "Jn", "phin", "s", "Jt", "phit", "energy"), parts, strict=True))
+        self.symbols.update(q=q, v=v, qdot=qdot)
         self.sizes = [(int(x.size1()), int(x.size2())) for x in map(ca.SX, parts)]
         # one flat output: each casadi call from Python, and each output's conversion, costs tens of microseconds
         self.fn = ca.Function("contact_state", [q, v], [ca.vertcat(*[ca.vec(ca.SX(x)) for x in parts])])

@@ -1,15 +1,18 @@
 """Frictional test bodies. Planar: a block on a slope, a round body on a table, a rod on its end, a box on two
-corners. Spatial (a two-component slip): a block on a slope and a ball on a table. Each returns
-``(mechanism, contacts)`` for :func:`~gausspp.friction.simulate_friction`; gravity ``G = 9.81`` along ``−y``."""
+corners. Spatial (a two-component slip): a block on a slope, a ball on a table, a box on its four corners. Each
+returns ``(mechanism, contacts)`` for :func:`~gausspp.friction.simulate_friction`; gravity ``G = 9.81`` along ``−y``."""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from ..model.mechanism import Lagrangian
+from ..multibody.bodies import spatial_body
+from ..multibody.front_end import Bodies
 from .contact import FrictionContact
 
 G = 9.81
@@ -98,6 +101,30 @@ def spatial_ball(mu: float, r: float = 0.1, m: float = 1.0) -> tuple:
     )
     slip = lambda q, v: ca.vertcat(v[0] + r * v[5], v[2] - r * v[3])  # noqa: E731
     return mech, [FrictionContact(lambda q: q[1] - r, slip, mu, name="table")]
+
+
+def spatial_box(mu: float, half: tuple = (0.2, 0.1, 0.1), m: float = 1.0, mu_static: float | None = None) -> tuple:
+    """A box of half-extents ``half`` on its four bottom corners, a free rigid body in space (``z`` up):
+    ``q = (x, y, z, quaternion w, x, y, z)``, ``v = (ẋ, ẏ, ż, ω in body axes)``; each corner's gap is its height
+    and its slip its horizontal velocity ``ṙ + R(ω × ℓ)``. At rest at ``q = (0, 0, half[2], 1, 0, 0, 0)``."""
+    a, b, c = (float(x) for x in half)
+    inertia = m / 3 * np.array([b * b + c * c, a * a + c * c, a * a + b * b])
+    body = replace(spatial_body("box", m, inertia, (0.0, 0.0, c), (1.0, 0.0, 0.0, 0.0), None), q_start=0, v_start=0)
+    mech = Bodies([body], np.array([0.0, 0.0, -G]))
+    contacts = []
+    for sx, sy, name in ((1, 1, "front-left"), (-1, 1, "back-left"), (-1, -1, "back-right"), (1, -1, "front-right")):
+        local = ca.DM([sx * a, sy * b, -c])
+
+        def gap(q, local=local):
+            return body.point(q, local)[2]
+
+        def slip(q, v, local=local):
+            _, R = body.parts(q)
+            velocity = v[0:3] + R @ ca.cross(v[3:6], local)
+            return velocity[0:2]
+
+        contacts.append(FrictionContact(gap, slip, mu, mu_static=mu_static, name=name))
+    return mech, contacts
 
 
 def round_body_drawing(r: float = 0.1, floor: tuple[float, float] = (-0.2, 1.8)) -> Any:

@@ -1,0 +1,169 @@
+"""Fixed-step frictional phases: compiled RK4 chunks, and each event located exactly inside its step.
+
+Each phase runs its compiled graph (:class:`.phase_graph.PhaseGraph`) :data:`.phase_graph.CHUNK` steps of
+length ``h`` per call, no Python between the steps. After a chunk the events' values are read at every step's
+end; the first step where one falls through zero is taken again from its start with the length ``h* ∈ [0, h]``
+at which that value is zero (Brent's method on the compiled step), so the event's time and state are those of
+an RK4 step, not of the grid. The modes are then chosen anew (:meth:`._Runner.modes_at`) and the next phase
+starts there. A motion that is polynomial of degree ≤ 4 within its phases (a box sliding to rest, a ball
+sliding until it rolls) is integrated exactly, events included.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..errors import IntegrationError, NonFiniteError
+from .modes import SLIDE, Modes, check_painleve
+from .phase_graph import CHUNK, PhaseGraph, kept_rows, rows_function
+from .run import Record
+
+#: A step whose rate changes by more than this (relative to the state's size, ``PhaseGraph.step``'s ``jump``) is too
+#: long for its phase: the run stops with an IntegrationError instead of stepping past what it cannot resolve.
+MAX_JUMP = 0.1
+
+
+class Phases:
+    """The compiled phases of one mechanism and its contacts, built on first use and kept (by modes and rows)."""
+
+    def __init__(self, runner: Any) -> None:
+        self.runner = runner
+        self.rows: dict[tuple[str, ...], Any] = {}
+        self.graphs: dict[tuple[tuple[str, ...], tuple[int, ...]], PhaseGraph] = {}
+
+    def at(self, modes: Modes, q: np.ndarray, v: np.ndarray) -> tuple[PhaseGraph, np.ndarray]:
+        """The graph of ``modes`` at ``(q, v)`` (its kept rows chosen there) and its directions' vector ``d``."""
+        r = self.runner
+        kinds = modes.kinds
+        d = np.zeros(int(sum(r.kin.dims)))
+        for i, kind in enumerate(kinds):
+            if kind == SLIDE:
+                d[r.kin.offsets[i] : r.kin.offsets[i + 1]] = modes.dirs[i]
+        if kinds not in self.rows:
+            self.rows[kinds] = rows_function(r.kin, r.contacts, kinds)
+        kept = kept_rows(self.rows[kinds](q, v, d).full())
+        key = (kinds, kept)
+        if key not in self.graphs:
+            self.graphs[key] = PhaseGraph(r.kin, r.contacts, kinds, kept, normalize=r.mech.normalize)
+        return self.graphs[key], d
+
+
+def falls(before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    """Where an event's value falls through zero between two samples (as scipy's ``direction = −1`` events)."""
+    return ((before >= 0) & (after < 0)) | ((before > 0) & (after <= 0))
+
+
+def run_phase(
+    phases: Phases,
+    modes: Modes,
+    t: float,
+    y: np.ndarray,
+    t_end: float,
+    h: float,
+    times: np.ndarray | None,
+    record: Record,
+    *,
+    codegen: bool = False,
+) -> tuple[float, np.ndarray, list[tuple[str, int]]]:
+    """Step the phase of ``modes`` from ``(t, y)`` until an event or ``t_end``; record its samples (every step, or
+    the ``times`` inside it, and the phase's start and end); ``codegen``: the chunks as C where a compiler is.
+    Returns the end's time, state and the events fired."""
+    runner = phases.runner
+    nq = runner.nq
+    q, v = y[:nq], y[nq:]
+    check_painleve(runner.kin(q, v), runner.contacts, modes, t)
+    graph, d = phases.at(modes, q, v)
+    step, chunk = graph.compiled() if codegen else (graph.step, graph.chunk)
+    names = modes.names()
+
+    def keep(ts: np.ndarray, Y: np.ndarray, out: np.ndarray) -> None:
+        N, F, energy, _ = graph.split(out)
+        record.add(ts, Y.T, names, N.T, F.T, energy)
+
+    def sample(t0: float, y0: np.ndarray, upto: float) -> None:
+        """Record the requested times in ``(t0, upto)`` by a partial step from ``(t0, y0)``."""
+        if times is None:
+            return
+        for tau in times[(times > t0) & (times < upto)]:
+            y1, out1, _ = step(y0, d, tau - t0)
+            keep(np.array([tau]), y1.full(), out1.full())
+
+    out0 = graph.report(q, v, d).full()
+    keep(np.array([t]), y[:, None], out0)
+    before = graph.split(out0)[3].ravel()
+    while True:
+        n_full = int(np.floor((t_end - t) / h * (1.0 + 1e-12)))
+        if n_full >= 1:
+            m = min(CHUNK, n_full)
+            Y, out, jump = (x.full()[:, :m] for x in chunk(y, d, h))
+            ts = t + h * np.arange(1, m + 1)
+            if m == n_full and t_end - ts[-1] <= 1e-12 * (1.0 + abs(t_end)):
+                ts[-1] = t_end
+        else:
+            y1, out1, jump1 = step(y, d, t_end - t)
+            Y, out, jump, ts = y1.full(), out1.full(), jump1.full(), np.array([t_end])
+        bad = ~(np.isfinite(Y).all(axis=0) & np.isfinite(out).all(axis=0)) | ~(jump[0] <= MAX_JUMP)
+        values = graph.split(out)[3]
+        fire = falls(np.column_stack([before, values[:, :-1]]), values).any(axis=0)
+        first = int(np.argmax(fire)) if fire.any() else ts.size
+        if bad[:first].any():
+            j = int(np.argmax(bad))
+            keep(ts[:j], Y[:, :j], out[:, :j])
+            _refuse(ts[j], h, names, Y[:, j], out[:, j], float(jump[0, j]))
+        starts = np.concatenate([[t], ts[:-1]])
+        if times is None:
+            keep(ts[:first], Y[:, :first], out[:, :first])
+        else:
+            for k in range(first):
+                sample(starts[k], Y[:, k - 1] if k else y, ts[k])
+                if ts[k] in times or ts[k] == t_end:
+                    keep(ts[k : k + 1], Y[:, k : k + 1], out[:, k : k + 1])
+        if first == ts.size:
+            t, y, before = float(ts[-1]), Y[:, -1].copy(), values[:, -1]
+            if t >= t_end:
+                return t, y, []
+            continue
+        t0, y0 = float(starts[first]), (Y[:, first - 1] if first else y).copy()
+        start_values = before if first == 0 else values[:, first - 1]
+        hit = np.flatnonzero(falls(start_values, values[:, first]))
+        h_step = float(ts[first] - t0)
+
+        def value(hh: float, k: int, y0: np.ndarray = y0) -> float:
+            return float(step(y0, d, hh)[1].full()[-len(graph.events) + k, 0])
+
+        roots = {int(k): _root(lambda hh, k=k: value(hh, k), h_step) for k in hit}
+        h_star = min(roots.values())
+        fired = [graph.events[k] for k, r in roots.items() if r <= h_star + 1e-12 * (1.0 + h_step)]
+        sample(t0, y0, t0 + h_star)
+        y1, out1, jump1 = step(y0, d, h_star)
+        y_star = y1.full().ravel()
+        if not (np.isfinite(y_star).all() and np.isfinite(out1.full()).all() and float(jump1) <= MAX_JUMP):
+            _refuse(t0 + h_star, h, names, y_star, out1.full().ravel(), float(jump1))
+        keep(np.array([t0 + h_star]), y_star[:, None], out1.full())
+        return t0 + h_star, y_star, fired
+
+
+def _refuse(t: float, h: float, names: tuple[str, ...], y: np.ndarray, out: np.ndarray, jump: float) -> None:
+    """Stop the run at the step ending at ``t``: non-finite numbers, or a step too long for its phase."""
+    if not (np.isfinite(y).all() and np.isfinite(out).all()):
+        raise NonFiniteError(
+            f"the state or the contact forces became non-finite at t={t:.6g} (modes {names}); check the mechanism's "
+            "formulas there, or take a shorter step"
+        )
+    raise IntegrationError(
+        f"the step h={h:g} is too long for the phase at t={t:.6g} (modes {names}): the rate changes by {jump:.3g} of "
+        f"the state's size within one step (more than {MAX_JUMP:g}: a stiff contact force, or a fast event); take a "
+        "shorter step, or step=None (adaptive)"
+    )
+
+
+def _root(f: Any, h: float) -> float:
+    """The first zero of ``f`` on ``[0, h]`` where ``f(0) ≥ 0 > f(h)`` (or ``f(0) > 0 ≥ f(h)``)."""
+    if f(0.0) <= 0.0:
+        return 0.0
+    if f(h) == 0.0:
+        return h
+    return float(brentq(f, 0.0, h, xtol=1e-16, rtol=4 * np.finfo(float).eps, maxiter=200))

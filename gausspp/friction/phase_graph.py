@@ -1,0 +1,180 @@
+"""A phase of a frictional run as one compiled casadi graph: fixed modes, RK4 steps, and the events' values.
+
+While the modes are fixed (:mod:`.modes`) the acceleration is a smooth function of ``(q, v)``:
+``q̈ = A⁻¹(f + C u)`` with ``(R A⁻¹ C) u = φ − R A⁻¹ f`` — the assembly of :func:`.modes.solve`, written here in
+casadi. Rows that depend on the others (a box flat on its four corners: four normal rows of rank three) are
+dropped once, at the phase's start, by a pivoted QR of ``M = R A⁻¹ C`` there (:func:`kept_rows`); the forces are
+then the least that meet the kept rows, ``u = M_rᵀ (M_r M_rᵀ)⁻¹ b_r`` — the least-squares solution of the
+adaptive integrator, the motion being Gauss's unique one. A two-component slip slides against its current
+direction, or against the phase's first direction ``d`` while it is below ``SLIP_FLOOR``; past the phase's end
+(``d·s < 0``, where an RK4 stage may reach) the direction is continued, ``−s/‖s‖``, not flipped, so the step that
+holds the event is the smooth phase's own.
+
+:class:`PhaseGraph` holds ``step(y, d, h) -> (y⁺, out⁺, jump)`` — one classical RK4 step; at its end the normal
+forces, friction forces, energy and events' values (``out``); and ``jump = max |h (k₄ − k₁)| / (1 + |y|)``, how much
+the rate changes within the step relative to the state (a step too long for the phase shows there) — and ``chunk``, :data:`CHUNK` such steps in one call
+(``mapaccum``: no Python between the steps).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from scipy.linalg import qr
+
+from ..c_code import c_function
+from .contact import FrictionContact
+from .kinematics import ContactKinematics
+from .modes import OPEN, SLIDE, STICK
+
+#: Steps taken in one call of a phase's ``chunk``.
+CHUNK = 256
+#: A two-component slip below this (relative to the velocities' size) slides along the phase's first direction.
+SLIP_FLOOR = 1e-7
+#: Relative rank tolerance of the pivoted QR that keeps the independent rows.
+RANK_TOL = 1e-10
+
+
+def _forces(
+    kin: ContactKinematics, contacts: list[FrictionContact], kinds: tuple[str, ...], d: ca.SX
+) -> dict[str, Any]:
+    """The phase's rows ``R x = φ``, columns ``C`` and slip directions, as expressions of ``(q, v, d)``."""
+    S, o = kin.symbols, kin.offsets
+    q, v = S["q"], S["v"]
+    Jn, Jt, s = ca.SX(S["Jn"]), ca.SX(S["Jt"]), ca.SX(S["s"])
+    speed = 1.0 + ca.mmax(ca.fabs(v))
+    cols, rows, rhs, where, dirs = [], [], [], [], []
+    for i, kind in enumerate(kinds):
+        part = slice(int(o[i]), int(o[i + 1]))
+        di = d[part]
+        if kind == SLIDE and kin.dims[i] > 1:  # against the slip's current direction, once it has one
+            size = ca.norm_2(s[part])
+            along = ca.if_else(ca.dot(di, s[part]) >= 0, 1, -1) * s[part] / ca.fmax(size, 1e-300)
+            di = ca.if_else(size > SLIP_FLOOR * speed, along, di)
+        dirs.append(di)
+        if kind == OPEN:
+            continue
+        rows.append(Jn[i, :])
+        rhs.append(S["phin"][i])
+        where.append((i, -1))
+        if kind == STICK:
+            cols.append(Jn[i, :].T)
+            for j in range(part.start, part.stop):
+                cols.append(Jt[j, :].T)
+                rows.append(Jt[j, :])
+                rhs.append(S["phit"][j])
+                where.append((i, j - part.start))
+        else:
+            cols.append(Jn[i, :].T - contacts[i].mu * Jt[part, :].T @ di)
+    A, f = ca.SX(S["A"]), ca.SX(S["f"])
+    x0 = ca.solve(A, f)
+    out: dict[str, Any] = {"q": q, "v": v, "x0": x0, "dirs": dirs, "where": where}
+    if cols:
+        C, R = ca.horzcat(*cols), ca.vertcat(*rows)
+        out["AinvC"] = ca.solve(A, C)
+        out["M"] = R @ out["AinvC"]
+        out["b"] = ca.vertcat(*rhs) - R @ x0
+    return out
+
+
+def rows_function(kin: ContactKinematics, contacts: list[FrictionContact], kinds: tuple[str, ...]) -> ca.Function:
+    """``(q, v, d) -> M``, the phase's matrix ``R A⁻¹ C`` (empty where every contact is open)."""
+    d = ca.SX.sym("d", int(sum(kin.dims)))
+    parts = _forces(kin, contacts, kinds, d)
+    return ca.Function("rows", [parts["q"], parts["v"], d], [parts.get("M", ca.SX(0, 0))])
+
+
+def kept_rows(M: np.ndarray) -> tuple[int, ...]:
+    """The rows of ``M`` a pivoted QR finds independent (relative tolerance :data:`RANK_TOL`), in order."""
+    if M.size == 0:
+        return ()
+    _, r, perm = qr(M.T, mode="economic", pivoting=True)
+    diag = np.abs(np.diag(r))
+    rank = int(np.sum(diag > RANK_TOL * max(diag[0], 1e-300)))
+    return tuple(sorted(int(p) for p in perm[:rank]))
+
+
+class PhaseGraph:
+    """The compiled step and chunk of one phase (module docstring): the modes ``kinds``, the kept rows ``kept``.
+
+    ``out`` stacks the normal forces (one per contact), the friction forces (one per slip component), the energy
+    and the events' values, named by :attr:`events` as ``(kind, contact index)`` in the adaptive integrator's
+    order; an event fires where its value falls through zero."""
+
+    def __init__(
+        self,
+        kin: ContactKinematics,
+        contacts: list[FrictionContact],
+        kinds: tuple[str, ...],
+        kept: tuple[int, ...],
+        normalize: Any = None,
+    ) -> None:
+        nd = int(sum(kin.dims))
+        d = ca.SX.sym("d", nd)
+        P = _forces(kin, contacts, kinds, d)
+        q, v, S, o = P["q"], P["v"], kin.symbols, kin.offsets
+        u = ca.SX(0, 1)
+        qdd = P["x0"]
+        if "M" in P:
+            Mr, br = P["M"][list(kept), :], P["b"][list(kept)]
+            u = ca.solve(Mr, br) if Mr.size1() == Mr.size2() else Mr.T @ ca.solve(Mr @ Mr.T, br)
+            qdd = P["x0"] + P["AinvC"] @ u
+        N = [ca.SX(0)] * kin.c
+        F = [ca.SX.zeros(int(k)) for k in kin.dims]
+        for (i, j), value in zip(P["where"], ca.vertsplit(u), strict=True):
+            if j < 0:
+                N[i] = value
+            else:
+                F[i][j] = value
+        events: list[ca.SX] = []
+        self.events: list[tuple[str, int]] = []
+        for i, kind in enumerate(kinds):
+            if kind == SLIDE:
+                F[i] = -contacts[i].mu * N[i] * P["dirs"][i]
+            if kind == OPEN:
+                events.append(S["g"][i]), self.events.append(("closes", i))
+            else:
+                events.append(N[i]), self.events.append(("lifts off", i))
+            if kind == SLIDE:
+                part = slice(int(o[i]), int(o[i + 1]))
+                events.append(ca.dot(d[part], S["s"][part])), self.events.append(("stops slipping", i))
+            if kind == STICK:
+                events.append(contacts[i].mu_static * N[i] - ca.norm_2(F[i]))
+                self.events.append(("starts to slip", i))
+        out = ca.vertcat(*N, *F, S["energy"], *events)
+        self.n_contacts, self.n_friction = kin.c, nd
+        rate = ca.Function("rate", [q, v, d], [ca.vertcat(S["qdot"], qdd)])
+        report = ca.Function("report", [q, v, d], [out])
+        nq = q.numel()
+        y, h = ca.SX.sym("y", nq + v.numel()), ca.SX.sym("h")
+
+        def f(z: ca.SX) -> ca.SX:
+            return rate(z[:nq], z[nq:], d)
+
+        k1 = f(y)
+        k2 = f(y + 0.5 * h * k1)
+        k3 = f(y + 0.5 * h * k2)
+        k4 = f(y + h * k3)
+        y1 = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if normalize is not None:
+            y1 = ca.vertcat(normalize(y1[:nq]), y1[nq:])
+        # how much the rate changes across the step, relative to the state's size: a guard, not an error estimate
+        jump = ca.mmax(ca.fabs(h * (k4 - k1)) / (1.0 + ca.fabs(y)))
+        self.report = report
+        self.step = ca.Function("step", [y, d, h], [y1, report(y1[:nq], y1[nq:], d), jump], {"cse": True})
+        self.chunk = self.step.mapaccum("chunk", CHUNK)
+        self._c: tuple[ca.Function, ca.Function] | None = None
+
+    def compiled(self) -> tuple[ca.Function, ca.Function]:
+        """The step and the chunk compiled to C (:func:`gausspp.c_code.c_function`, kept on disk), or themselves
+        where there is no C compiler."""
+        if self._c is None:
+            self._c = (c_function(self.step) or self.step, c_function(self.chunk) or self.chunk)
+        return self._c
+
+    def split(self, out: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``out`` (rows, one column per sample) as normal forces, friction forces, energy, events' values."""
+        c, nd = self.n_contacts, self.n_friction
+        return out[:c], out[c : c + nd], out[c + nd], out[c + nd + 1 :]
