@@ -11,7 +11,7 @@ Prints, measured in one run on this machine:
   overconstrained loop the size of Bricard's) swinging for 10 s — beside MuJoCo's four-bar (``connect``, RK4,
   dt = 1e-3, stiffest settings) and box drop when the peers extra is installed (``benchmarks/_mujoco_peers.py``);
 * the ladder of double-parallelogram cells: ``model.step`` for N = 4 … 64 and its growth exponent, the first
-  step's time (the Python route decides, the pattern compiles), beside MuJoCo's parallelogram ladder (its cells
+  step's time (the Python step decides, the pattern compiles), beside MuJoCo's parallelogram ladder (its cells
   without the third bar: MuJoCo's soft ``connect`` rows need none).
 
 ``--before REV`` runs the same measurements on the package as it was at git revision ``REV`` (a temporary

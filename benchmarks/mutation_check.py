@@ -97,7 +97,7 @@ MUTANTS: tuple[Mutant, ...] = (
     ),
     Mutant(
         "general-qp-half",
-        "general Gauss QP (Python route): half the reaction w goes into the acceleration",
+        "general Gauss QP (Python step): half the reaction w goes into the acceleration",
         "step/general/solve.py",
         "reaction = w * s.unit",
         "reaction = 0.5 * w * s.unit",
@@ -165,14 +165,14 @@ MUTANTS: tuple[Mutant, ...] = (
         "GAP_FLOOR = 1e-3",
         ("tests/test_integral.py", "tests/test_verify_every_scene.py"),
     ),
-    # -- the servo route, the disk cache, the margin, the audits -------------------------------------------------
+    # -- index reduction, the disk cache, the margin, the audits -------------------------------------------------
     Mutant(
         "servo-poles-positive",
-        "servo route: feedback polynomial (s − p)ʳ, poles at +p (unstable)",
-        "servo/route.py",
+        "index reduction: feedback polynomial (s − p)ʳ, poles at +p (unstable)",
+        "servo/index_reduction.py",
         "comb(r, j) * p ** (r - j) * chain[j]",
         "comb(r, j) * (-p) ** (r - j) * chain[j]",
-        ("tests/test_servo_route.py",),
+        ("tests/test_index_reduction.py",),
     ),
     Mutant(
         "cache-off-directory",

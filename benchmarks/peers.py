@@ -8,8 +8,8 @@ gausspp has it as the ``pendulum`` scene, whose ``exact`` (the 1-DOF equation ab
 
 Rows:
 
-- **gausspp** — the whole ``gp.simulate`` call (set-up and recording included) with ``rk4`` and
-  ``rk4-compiled``, step solver ``direct`` and ``qp``; DOP853 at ``rtol = atol = 1e-10``; one checked
+- **gausspp** — the whole ``gp.simulate`` call (set-up and recording included) with ``rk4`` in the Python
+  and the compiled lanes, step solver ``direct`` and ``qp``; DOP853 at ``rtol = atol = 1e-10``; one checked
   ``model.step`` call.
 - **MuJoCo** (optional) — the body on a free joint pinned by an ``equality connect``, integrator RK4,
   ``timestep = dt``, with the default equality softness and the stiffest one MuJoCo allows
@@ -95,17 +95,17 @@ def call_row(what: str, call: Callable[[], Any], args: argparse.Namespace) -> Ro
 
 
 def gausspp_rows(scene: gp.scenes.Scene, args: argparse.Namespace) -> list[Row]:
-    """``gp.simulate`` (rk4, rk4-compiled × direct, qp; DOP853) and one checked ``model.step``."""
+    """``gp.simulate`` (rk4 from Python and compiled × direct, qp; DOP853) and one checked ``model.step``."""
     model, q0, v0, t_end = scene.model, scene.q0, scene.v0, scene.t_end
 
     def error(traj: Any) -> tuple[float, float]:
         return state_error(scene, traj.t[-1], traj.q[-1], traj.v[-1])
 
     rows = []
-    for method in ("rk4", "rk4-compiled"):
+    for lane in ("python", "compiled"):
         for solver in ("direct", "qp"):
-            run = lambda m=method, s=solver: gp.simulate(model, q0, v0, t_end, dt=DT, method=m, solver=s)  # noqa: E731
-            rows.append(timed_run(f"gausspp simulate {method} {solver}", run, error, args))
+            run = lambda ln=lane, s=solver: gp.simulate(model, q0, v0, t_end, dt=DT, method="rk4", lane=ln, solver=s)  # noqa: E731
+            rows.append(timed_run(f"gausspp simulate rk4 {lane} {solver}", run, error, args))
     for solver in ("direct", "qp"):
         run = lambda s=solver: gp.simulate(model, q0, v0, t_end, method="DOP853", solver=s, rtol=1e-10, atol=1e-10)  # noqa: E731
         row = timed_run(f"gausspp simulate DOP853 {solver}", run, error, args)

@@ -9,7 +9,7 @@ reported "over budget" and the larger ``N`` of that route are skipped.
 Per ``N``, for ``solver="direct"`` and ``solver="qp"`` (``--solvers``):
 
 - **build s** — constructing the model (``gp.scenes.get("planar-chain", N=N)``);
-- **first s** — the first ``gp.simulate(..., method="rk4-compiled", dt=1e-3)`` of 1000 steps: it builds and
+- **first s** — the first ``gp.simulate(..., method="rk4", lane="compiled", dt=1e-3)`` of 1000 steps: it builds and
   compiles the run's graph;
 - **µs/step** — a second identical run, wall / 1000 (set-up and recording of every step included);
 - **step only** — the same run recording its two ends only (``record=1000``), wall / 1000, best of three: the
@@ -103,7 +103,9 @@ def gausspp_child(N: int, solver: str, mechanism: str, route: str, codegen: bool
     q0, v0 = scene.q0, scene.v0
 
     def run(record: int = 1) -> Any:
-        return gp.simulate(model, q0, v0, CHAIN["t_end"], dt=DT, method="rk4-compiled", solver=solver, record=record)
+        return gp.simulate(
+            model, q0, v0, CHAIN["t_end"], dt=DT, method="rk4", lane="compiled", solver=solver, record=record
+        )
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -389,7 +391,7 @@ def main() -> None:
         print("mujoco is not installed (pip install gausspp[peers]): its columns are skipped")
     results = measure(routes, args)
     scene = MECHANISMS[args.mechanism][0]
-    print(f"\n{scene}, rk4-compiled, dt = {DT:g}, {STEPS} steps; budget {args.budget:g} s per N and route")
+    print(f"\n{scene}, rk4 compiled, dt = {DT:g}, {STEPS} steps; budget {args.budget:g} s per N and route")
     print_table(results, args)
     print_exponents(results)
     if args.figure:

@@ -2,7 +2,7 @@
 
 Two fresh Python processes in turn, sharing one empty disk cache (``GAUSSPP_CACHE_DIR``, a temporary directory):
 each builds the ``planar-chain`` scene of ``N`` links, makes one checked ``model.step``, then one
-``gp.simulate(..., method="rk4-compiled", dt=1e-3)`` of 1000 steps. Printed for each: the import of gausspp, the
+``gp.simulate(..., method="rk4", lane="compiled", dt=1e-3)`` of 1000 steps. Printed for each: the import of gausspp, the
 model, the first step (model + first ``model.step``), and the first run — the first process compiles and stores,
 the second loads (:mod:`gausspp.disk_cache`). The time to the first step is the issue's figure (target ≤ 0.5 s).
 """
@@ -28,7 +28,7 @@ model = scene.model
 built = time.perf_counter()
 model.step(0.0, scene.q0, scene.v0, solver="direct")
 stepped = time.perf_counter()
-gp.simulate(model, scene.q0, scene.v0, 1.0, dt=1e-3, method="rk4-compiled", solver="direct")
+gp.simulate(model, scene.q0, scene.v0, 1.0, dt=1e-3, method="rk4", lane="compiled", solver="direct")
 ran = time.perf_counter()
 print(json.dumps(dict(import_s=imported - start, model_s=built - imported, first_step_s=stepped - imported,
                       first_run_s=ran - stepped, counts=disk_cache.counts)))

@@ -26,8 +26,8 @@ from gausspp.simulation.compiled import rhs_function, rk_step_function
 from gausspp.simulation.drift import Stabilization
 
 RUNS = [
-    ("rk4", {"dt": 1e-3}),
-    ("rk4-compiled", {"dt": 1e-3}),
+    ("rk4", {"dt": 1e-3, "lane": "python"}),
+    ("rk4", {"dt": 1e-3, "lane": "compiled"}),
     ("DOP853", {"rtol": 1e-10, "atol": 1e-12}),
     ("Radau", {"rtol": 1e-8, "atol": 1e-10}),
     ("cvodes", {"rtol": 1e-10, "atol": 1e-12}),
@@ -54,7 +54,8 @@ def scene_table(horizon: float, repeats: int) -> None:
         t_end = min(scene.t_end, horizon)
         for method, opts in RUNS:
             for solver in ("direct", "qp"):
-                if not lanes.accepts(methods.get(method), solver):
+                label = f"{method} {opts['lane']}" if "lane" in opts else method
+                if not lanes.accepts(methods.get(method), solver, lane=opts.get("lane")):
                     continue  # e.g. CVODES differentiates the right-hand side: direct path only
                 try:
                     with warnings.catch_warnings():
@@ -78,11 +79,11 @@ def scene_table(horizon: float, repeats: int) -> None:
                         q, v = scene.exact(traj.t[-1])
                         err = f"{max(np.abs(traj.q[-1] - q).max(), np.abs(traj.v[-1] - v).max()):.1e}"
                     print(
-                        f"{name:20s} {method:13s} {traj.solver:12s} {wall:8.3f} {traj.steps:7d} "
+                        f"{name:20s} {label:13s} {traj.solver:12s} {wall:8.3f} {traj.steps:7d} "
                         f"{traj.rhs_evaluations:7d} {wall / max(traj.steps, 1) * 1e6:8.1f} {err:>9s}"
                     )
                 except gp.GaussppError as exc:
-                    print(f"{name:20s} {method:13s} {solver:12s} FAILED: {exc}")
+                    print(f"{name:20s} {label:13s} {solver:12s} FAILED: {exc}")
 
 
 def compiled_step_cost(steps: int = 20_000) -> None:

@@ -3,7 +3,7 @@
 For each scene, ``solver="direct"`` and ``solver="qp"`` with every backend in :func:`gausspp.qp.names`:
 
 1. **raw µs/step** — ``kernel.evaluate()`` on inputs written once into ``kernel.inputs``, the hot
-   path of a simulation loop (one C call on the compiled route; build, Python solve, finish on the
+   path of a simulation loop (one C call with the compiled family; build, Python solve, finish on the
    qpsolvers route);
 2. **model.step µs** — the checked ``Model.step`` (validation, realizability margin, QP residual
    check, result packaging) on the same state;

@@ -129,6 +129,8 @@ def _kind(obj: object) -> str:
         return "Errors and warnings"
     if inspect.isclass(obj):
         return "Classes"
+    if not callable(obj):
+        return "Registries"
     return "Functions"
 
 
@@ -137,7 +139,7 @@ def _api_section(module: object, title: str) -> list[str]:
     for name in sorted(module.__all__, key=str.lower):
         groups.setdefault(_kind(getattr(module, name)), []).append(name)
     lines = [title, "-" * len(title), "", f".. currentmodule:: {module.__name__}", ""]
-    for kind in ("Classes", "Functions", "Modules", "Errors and warnings"):
+    for kind in ("Classes", "Functions", "Registries", "Modules", "Errors and warnings"):
         if kind in groups:
             lines += [f".. rubric:: {kind}", "", ".. autosummary::", "   :toctree: generated", ""]
             lines += [f"   {name}" for name in groups[kind]] + [""]
@@ -153,6 +155,10 @@ def _write_api() -> None:
     text = "\n".join(lines)
     if not target.exists() or target.read_text() != text:
         target.write_text(text)
+    public = {f"{m.__name__}.{n}" for m in (gausspp, gausspp.scenes) for n in m.__all__}
+    for page in (DOCS / "api" / "generated").glob("*.rst"):  # a name no longer public: its page goes too
+        if page.stem not in public:
+            page.unlink()
 
 
 _write_api()

@@ -175,7 +175,7 @@ def slider_crank_reference(
 ) -> np.ndarray:
     """The crank angle by Lagrange's equation in it alone, ``M(θ) θ̈ + ½ M′(θ) θ̇² + V′(θ) = 0``, written by sympy
     from the geometry (the rod's angle ``φ = asin(−r sin θ / L)``, the slider at ``r cos θ + L cos φ``) and solved
-    by scipy — a route that shares nothing with gausspp's."""
+    by scipy — a computation that shares nothing with gausspp's."""
     import sympy as sp
 
     mc, mr, ms = masses

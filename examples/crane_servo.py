@@ -47,7 +47,7 @@ fig, (ax_path, ax_force) = plt.subplots(1, 2, figsize=(11, 4.2), layout="constra
 s, l, theta = traj.q.T
 X, Y = s + l * np.sin(theta), -l * np.cos(theta)
 rs, rl, rth = replayed.q.T
-ax_path.plot(X, Y, color="#0072B2", lw=3, label="payload (servo route)")
+ax_path.plot(X, Y, color="#0072B2", lw=3, label="payload (index reduction)")
 ax_path.plot(rs + rl * np.sin(rth), -rl * np.cos(rth), "--", color="#E69F00", lw=1.5, label="open-loop replay")
 ax_path.plot(s, np.zeros_like(s), color="#555555", lw=2, label="trolley")
 for i in range(0, traj.t.size, 100):  # the rope every 0.5 s
@@ -66,10 +66,10 @@ print(f"\nfigure written to {out}")
 
 # %%
 # The crane moving: the trolley on its rail, the rope, the payload on its prescribed path (dashed), as the
-# servo route computes it and as the free crane replays it under the recorded forces alone.
+# index reduction computes it and as the free crane replays it under the recorded forces alone.
 anim = plot.animate(
     scene,
-    {"servo route": traj, "open-loop replay": replayed},
+    {"index reduction": traj, "open-loop replay": replayed},
     frames=50,
     fps=10,
     out=sys.argv[2] if len(sys.argv) > 2 else None,

@@ -5,7 +5,7 @@ The UR5 of example-robot-data (``gp.from_urdf``): six revolute joints, ``A(q) q�
 position ``p(q)`` must follow ``p₀ + (1 − cos 2t) d`` — three coordinates — and the constraint is realized by a
 Béghin servo force ``gp.Force`` whose directions are the six joint torques (the identity). Six actuators for three
 path coordinates: the arm is redundant, and Gauss's principle picks, among the torques that keep the tool on its
-path, the motion of least compulsion (the QP route) — the motion the arm would have if the tool were guided by an
+path, the motion of least compulsion (the QP solver) — the motion the arm would have if the tool were guided by an
 ideal constraint. The model is the scene ``ur5-tool-path`` (gausspp/scenes/ur5_tool_path.py).
 Nothing holds the three-dimensional self-motion: the wrists swing freely (the printed joint
 speeds), which is why the move is kept short. The computed torques are then compared with Pinocchio's
@@ -52,7 +52,7 @@ rnea = np.array([pin.rnea(pm, data, q, v, a) for q, v, a in zip(traj.q, traj.v, 
 relative = np.linalg.norm(traj.reaction - rnea, axis=1) / np.linalg.norm(rnea, axis=1)
 verdict = gp.verify(model, traj)
 print(f"UR5 ({', '.join(mech.joint_names)}): tool path of 3 coordinates by 6 joint torques (least compulsion)")
-print(f"  simulate (QP route)          {wall:.2f} s, status {traj.status}")
+print(f"  simulate (QP solver)          {wall:.2f} s, status {traj.status}")
 print(f"  tool off its path            {np.abs(traj.g).max():.1e} m")
 print(f"  torques vs Pinocchio RNEA    {relative.max():.1e} (largest relative difference)")
 print(f"  largest joint speed          {np.abs(traj.v).max():.1f} rad/s (the free self-motion)")

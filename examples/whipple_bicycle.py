@@ -224,7 +224,7 @@ class Bicycle:
         return self.imported.speeds.index(name)
 
     def evaluate(self, q: np.ndarray, u: np.ndarray) -> Any:
-        """The model's step data at ``(q, u)``: ``g``, ``Φ``, ``J`` … (:class:`gausspp.step.data.StepData`)."""
+        """The model's step data at ``(q, u)``: ``g``, ``Φ``, ``J`` … (:class:`gausspp.step.data.StepProblem`)."""
         return self.model.evaluate_data(0.0, q, u, np.zeros(self.model.n_lam))
 
     def upright_pitch(self) -> np.ndarray:

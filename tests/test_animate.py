@@ -24,7 +24,7 @@ def _frames(path: Path) -> int:
 
 
 def _run(scene: gp.scenes.Scene) -> object:
-    if scene.name == "overhead-crane":  # a tangential servo: the servo route
+    if scene.name == "overhead-crane":  # a tangential servo: index reduction
         return gp.simulate_servo(scene.model, scene.q0, scene.v0, scene.t_end, record=np.linspace(0, scene.t_end, 61))
     return gp.simulate(scene.model, scene.q0, scene.v0, scene.t_end, record=np.linspace(0, scene.t_end, 61))
 

@@ -126,7 +126,7 @@ def test_plot_imports_no_computing_code() -> None:
 LAYERS = (
     "gausspp.step",
     "gausspp.model",
-    "gausspp.servo",  # the servo route integrates a model of its own; gp.simulate runs it (simulation/servo_lane.py)
+    "gausspp.servo",  # index reduction integrates a model of its own; gp.simulate runs it (simulation/servo_lane.py)
     "gausspp.simulation",
     "gausspp.friction",  # frictional contacts: a mechanism and its contacts, integrated on their own
     "gausspp.scenes",
@@ -171,7 +171,7 @@ def test_a_model_does_not_change() -> None:
     model.step(0.0, scene.q0, scene.v0)
     model.step(0.0, scene.q0, scene.v0, solver="direct")
     traj = gp.simulate(model, scene.q0, scene.v0, 0.05, dt=0.01, method="rk4")
-    gp.simulate(model, scene.q0, scene.v0, 0.05, dt=0.01, method="rk4-compiled", solver="direct")
+    gp.simulate(model, scene.q0, scene.v0, 0.05, dt=0.01, method="rk4", lane="compiled", solver="direct")
     gp.verify(model, traj)
     after = vars(model)
     assert after.keys() == before.keys()

@@ -295,7 +295,7 @@ ROWS = [
     row("simulate dt a string", lambda: run(dt="0.01"), gp.InputError, r"dt must be a positive number .*got '0\.01'"),
     row(
         "simulate t_end 1e300 compiled",
-        lambda: run(t_end=1e300, dt=0.01, method="rk4-compiled", solver="direct"),
+        lambda: run(t_end=1e300, dt=0.01, method="rk4", lane="compiled", solver="direct"),
         gp.InputError,
         r"t_end - t0 = 1e\+300 .* steps, more than .* enlarge dt",
     ),
@@ -711,7 +711,7 @@ def test_a_long_adaptive_run_warns_with_a_lower_bound() -> None:
 def test_states_that_do_not_fit_in_memory_are_refused() -> None:
     # the compiled RK keeps every step: 1e8 states of 6 numbers are 4.5 GiB
     with pytest.raises(gp.InputError, match=r"would keep 1e\+08 states .*GiB"):
-        run(t_end=1e4, dt=1e-4, method="rk4-compiled", solver="direct")
+        run(t_end=1e4, dt=1e-4, method="rk4", lane="compiled", solver="direct")
 
 
 def test_the_command_line_shows_the_long_run_warning_at_once(monkeypatch: pytest.MonkeyPatch) -> None:

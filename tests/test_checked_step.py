@@ -1,7 +1,7 @@
-"""The checked step's hot path (gausspp/step/checked_call.py): the same answer as the full route, every check kept.
+"""The checked step's hot path (gausspp/step/checked_call.py): the same answer as the full step, every check kept.
 
 ``model.step`` answers from one buffer-bound call when the state is an array of the right shape and every
-check passes in the graph (an all-clear flag); otherwise the full route (``checked_step``) answers. These tests
+check passes in the graph (an all-clear flag); otherwise the full step (``checked_step``) answers. These tests
 compare the two routes on every scene the hot path serves, and probe each check with an input that must fail
 it — including NaN in a coordinate the step's graph never reads. The closed-form cosines of one or two rows
 are compared with numpy's SVD, and each comparison is shown to fail on a deliberately wrong answer.
@@ -96,14 +96,14 @@ def same(fast: gp.StepResult, full: gp.StepResult) -> bool:
     )
 
 
-def full_route(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray | None, solver: str):
+def full_step(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray | None, solver: str):
     t, q, v, lam = model.checked_state(t, q, v, lam)
     return checked.checked_step(model, t, q, v, lam, solver, None, model.refine)
 
 
 @pytest.mark.parametrize("solver", ["direct", "qp"])
 @pytest.mark.parametrize("name", SCENES)
-def test_the_hot_path_answers_as_the_full_route(name: str, solver: str) -> None:
+def test_the_hot_path_answers_as_the_full_step(name: str, solver: str) -> None:
     scene = gp.scenes.get(name, **PARAMS.get(name, {}))
     model, q, v = scene.model, np.asarray(scene.q0, float), np.asarray(scene.v0, float)
     lam = scene.lam0 if getattr(scene, "lam0", None) is not None else None
@@ -111,7 +111,7 @@ def test_the_hot_path_answers_as_the_full_route(name: str, solver: str) -> None:
     assert hot is not None
     fast = hot(0.0, q, v, None if lam is None else np.asarray(lam, float))
     assert fast is not None, "the hot path declined a plain, valid state"
-    full = full_route(model, 0.0, q, v, lam, solver)
+    full = full_step(model, 0.0, q, v, lam, solver)
     assert same(fast, full)
     assert same(model.step(0.0, q, v, lam, solver=solver), full)
     assert fast == fast and isinstance(fast, gp.StepResult)  # a dataclass like any other result
@@ -122,7 +122,7 @@ def test_the_hot_path_answers_as_the_full_route(name: str, solver: str) -> None:
 @settings(max_examples=40, deadline=None)
 @given(st.lists(st.floats(-0.3, 0.3), min_size=6, max_size=6))
 def test_off_the_manifold_both_routes_agree_or_both_refuse(offset: list[float]) -> None:
-    """Perturbed states (off the constraint): the hot path answers as the full route, or leaves it to it."""
+    """Perturbed states (off the constraint): the hot path answers as the full step, or leaves it to it."""
     scene = gp.scenes.get("pendulum")
     model = scene.model
     q = np.asarray(scene.q0, float) + np.array(offset[: model.nq])
@@ -132,7 +132,7 @@ def test_off_the_manifold_both_routes_agree_or_both_refuse(offset: list[float]) 
         try:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
-                full = full_route(model, 0.0, q, v, None, solver)
+                full = full_step(model, 0.0, q, v, None, solver)
         except gp.GaussppError:
             assert fast is None
         else:
@@ -158,7 +158,7 @@ def test_nan_in_a_coordinate_the_graph_never_reads_is_still_refused(solver: str)
         model.step(math.nan, np.zeros(2), np.zeros(2), solver=solver)
 
 
-def test_other_inputs_take_the_full_route_with_its_errors() -> None:
+def test_other_inputs_take_the_full_step_with_its_errors() -> None:
     scene = gp.scenes.get("pendulum")
     model, q, v = scene.model, np.asarray(scene.q0, float), np.asarray(scene.v0, float)
     hot = checked.checked_call(model, "direct", None, model.refine)
@@ -175,7 +175,7 @@ def test_other_inputs_take_the_full_route_with_its_errors() -> None:
         model.step(0.0, q, v, solver="fast")
 
 
-def test_a_small_margin_is_left_to_the_full_route_which_warns() -> None:
+def test_a_small_margin_is_left_to_the_full_step_which_warns() -> None:
     """A servo whose force is nearly tangent to its constraint: margin 1e-7 < margin_warn = 1e-6."""
     body = gp.Lagrangian(n=2, T=lambda q, v, t: 0.5 * (v[0] ** 2 + v[1] ** 2))
     servo = gp.Constraint(lambda q, v, t: v[1], name="servo", realization=gp.Force(lambda q, v, t: [1.0, 1e-7]))

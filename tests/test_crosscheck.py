@@ -84,7 +84,7 @@ def test_the_reference_is_the_paper_servo_motion() -> None:
 
 
 def test_a_wrong_direct_formula_is_caught(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A test double of the direct route that solves with Ŝᵀ instead of Ŝ (a transposition slip): the
+    """A test double of the direct formula that solves with Ŝᵀ instead of Ŝ (a transposition slip): the
     cross-check reports it (Ŝ is not symmetric for a force realization); the true formula passes."""
     n, k, m, seed = SHAPES[1]
     rng = np.random.default_rng(7)

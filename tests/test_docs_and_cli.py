@@ -120,7 +120,9 @@ def test_demo_says_which_qp_backends_it_compared(
         pytest.skip(f"{first} is not installed")
     names = gausspp.scenes.names
     monkeypatch.setattr(
-        gausspp.scenes, "names", lambda kind="all": ["two-actuator-servo"] if kind == "general" else names(kind)
+        gausspp.scenes,
+        "names",
+        lambda category="all": ["two-actuator-servo"] if category == "general" else names(category),
     )
     monkeypatch.setattr(gausspp.step.general, "default_backend", lambda: first)
     which = demo.backends()

@@ -146,7 +146,9 @@ def test_the_gauss_qp_over_the_cone_agrees_with_the_direct_solution(alpha, mu, s
     state = kin(np.array([0.0, r, 0.0]), v)
     slipping = {0: np.sign(state.s[0])} if abs(state.s[0][0]) > 1e-12 else {}
     x0 = np.linalg.solve(state.A, state.f)
-    modes, direct = choose(state, contacts, [0], slipping, x0, state.phin, state.phit, 0.0, 1e-9)
+    modes, direct = choose(
+        state, contacts, [0], slipping, x0=x0, target_n=state.phin, target_t=state.phit, t=0.0, tol=1e-9
+    )
     by_qp = gauss_qp_step(state, contacts, [0])
     scale = m * G
     if by_qp is None:  # it cannot stick while closed
@@ -165,7 +167,9 @@ def test_the_cross_check_fails_on_a_wrong_direct_answer() -> None:
     kin = ContactKinematics(mech, contacts)
     state = kin(np.array([0.0, 0.1, 0.0]), np.array([1.0, 0.0, 0.0]))
     x0 = np.linalg.solve(state.A, state.f)
-    _, direct = choose(state, wrong, [0], {0: np.ones(1)}, x0, state.phin, state.phit, 0.0, 1e-9)
+    _, direct = choose(
+        state, wrong, [0], {0: np.ones(1)}, x0=x0, target_n=state.phin, target_t=state.phit, t=0.0, tol=1e-9
+    )
     a, _, _ = gauss_qp_step(state, contacts, [0])
     assert np.abs(a - direct.x).max() > 1e-7 * G
 
@@ -184,7 +188,7 @@ def test_the_relaxed_cone_problem_lifts_the_hoop_where_coulomb_keeps_it_on_the_s
     contacts = [gp.FrictionContact(lambda q: q[1] - r, lambda q, v: v[0] + r * v[2], mu, name="slope")]
     state = ContactKinematics(mech, contacts)(np.array([0.0, r, 0.0]), np.zeros(3))
     x0 = np.linalg.solve(state.A, state.f)
-    modes, direct = choose(state, contacts, [0], {}, x0, state.phin, state.phit, 0.0, 1e-9)
+    modes, direct = choose(state, contacts, [0], {}, x0=x0, target_n=state.phin, target_t=state.phit, t=0.0, tol=1e-9)
     assert modes.names() == ("slide+",) and abs(direct.x[1]) <= 1e-12  # Coulomb: slides, stays on the slope
     assert gauss_qp_step(state, contacts, [0]) is None  # cannot stick while closed
     a, N, _ = gauss_qp_step(state, contacts, [0], relaxed=True)

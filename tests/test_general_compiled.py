@@ -1,4 +1,4 @@
-"""The compiled general step (gausspp.step.general.compiled): one call, an all-clear flag, the Python route behind it.
+"""The compiled general step (gausspp.step.general.compiled): one call, an all-clear flag, the Python step behind it.
 
 Each answer of the compiled call is checked two ways:
 
@@ -7,7 +7,7 @@ Each answer of the compiled call is checked two ways:
   equation with the reaction ``D u + J_cᵀ λ_c``, the rows kept, the contacts not penetrating with ``λ_c ≥ 0`` and
   complementary, the bounds, and stationarity ``Dᵀ(a − a₀)`` in the span of the active rows' ``(J A⁻¹ D)ᵀ`` —
   shown to fail on a deliberately wrong answer;
-* against the Python route of the same step (the lexicographic stages of :mod:`gausspp.step.general.solve`).
+* against the Python step of the same step (the lexicographic stages of :mod:`gausspp.step.general.solve`).
 
 States come from runs of the general scenes (saturated, resting, bouncing, redundant) and are perturbed off the
 constraint manifold by hypothesis.
@@ -52,13 +52,13 @@ def case(name: str) -> tuple[gp.Model, np.ndarray, np.ndarray, np.ndarray, np.nd
     return sc.model, traj.t, traj.q, traj.v, lam
 
 
-def python_route(model, t, q, v, lam):
+def python_step(model, t, q, v, lam):
     return general_step.solve_at(model, t, q, v, lam, None, compiled=False)
 
 
 def compiled(model, t, q, v, lam):
-    """The compiled call's answer at the state (after the Python route decided the pattern), or None."""
-    general_step.solve_at(model, t, q, v, lam, None)  # decides and compiles the pattern (Python route if needed)
+    """The compiled call's answer at the state (after the Python step decided the pattern), or None."""
+    general_step.solve_at(model, t, q, v, lam, None)  # decides and compiles the pattern (Python step if needed)
     fast = general_step.compiled_outputs(model, t, q, v, lam, None, NO_STAB, None, CONSISTENCY_TOL)
     return None if fast is None else general_step._from_packed(model, t, *fast)
 
@@ -119,9 +119,9 @@ def test_compiled_general_step_is_the_gauss_qp_at_every_sample(name: str) -> Non
     for i in range(0, T.size, max(1, T.size // 25)):
         t, q, v, lam = float(T[i]), Q[i], V[i], L[i]
         try:
-            reference, ref_sol, _ = python_route(model, t, q, v, lam)
+            reference, ref_sol, _ = python_step(model, t, q, v, lam)
         except gp.GaussppError:
-            continue  # an approaching contact at an impact sample: the Python route's error
+            continue  # an approaching contact at an impact sample: the Python step's error
         answer = compiled(model, t, q, v, lam)
         if answer is None:
             continue
@@ -140,7 +140,7 @@ def test_the_optimality_check_fails_on_a_wrong_answer() -> None:
         model, T, Q, V, L = case(name)
         i = T.size - 1 if name == "block-resting" else T.size // 2
         t, q, v, lam = float(T[i]), Q[i], V[i], L[i]
-        result, sol, _ = python_route(model, t, q, v, lam)
+        result, sol, _ = python_step(model, t, q, v, lam)
         assert optimality_gap(model, t, q, v, lam, result, sol) < 1e-8
         d = model.evaluate_data(t, q, v, lam)
         if name == "block-resting":  # the contact forces, each pushed 10 % off
@@ -161,8 +161,8 @@ def test_the_optimality_check_fails_on_a_wrong_answer() -> None:
     size=st.sampled_from([0.0, 1e-12, 1e-9, 1e-6, 1e-3]),
     seed=st.integers(0, 2**16),
 )
-def test_off_the_manifold_the_compiled_step_answers_as_the_python_route(name, where, size, seed) -> None:
-    """Drifted states: where the flag is up the answers agree; where it is down the Python route answers."""
+def test_off_the_manifold_the_compiled_step_answers_as_the_python_step(name, where, size, seed) -> None:
+    """Drifted states: where the flag is up the answers agree; where it is down the Python step answers."""
     model, T, Q, V, L = case(name)
     i = int(where * (T.size - 1))
     rng = np.random.default_rng(seed)
@@ -170,7 +170,7 @@ def test_off_the_manifold_the_compiled_step_answers_as_the_python_route(name, wh
     q = Q[i] + size * rng.standard_normal(Q.shape[1])
     v = V[i] + size * rng.standard_normal(V.shape[1])
     try:
-        reference = python_route(model, t, q, v, lam)[0]
+        reference = python_step(model, t, q, v, lam)[0]
     except gp.GaussppError as exc:
         with pytest.raises(type(exc)):
             general_step.solve_at(model, t, q, v, lam, None)
@@ -196,7 +196,7 @@ def test_redundant_model_step_takes_the_compiled_general_step() -> None:
 
 
 def test_flag_down_when_the_contacts_change() -> None:
-    """The pattern of a resting block does not answer for the block in the air: the Python route does."""
+    """The pattern of a resting block does not answer for the block in the air: the Python step does."""
     model, T, Q, V, L = case("block-resting")
     t, q, v, lam = float(T[-1]), Q[-1], V[-1], L[-1]
     compiled(model, t, q, v, lam)  # the resting pattern
@@ -259,9 +259,9 @@ def test_double_parallelogram_passes_its_first_collinear_position_on_its_branch(
 
 @pytest.mark.parametrize("name", ["saturated-crane", "bouncing-pendulum", "block-on-floor", "four-bar-redundant"])
 def test_the_compiled_general_step_changes_no_trajectory(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Whole runs at rtol = atol = 1e-12 with the compiled general step and with the Python route alone (the
+    """Whole runs at rtol = atol = 1e-12 with the compiled general step and with the Python step alone (the
     compiled call switched off): the same trajectory to 1e-10 relative (measured ≤ 6e-12 against the previous
-    release, whose general step was the Python route)."""
+    release, whose general step was the Python step)."""
     sc = scenes.get(name)
     grid = np.linspace(0.0, 1.0, 11)
 

@@ -22,7 +22,7 @@ def _problem(**changes: object) -> GaussProblem:
         D=J.T,
         J=J,
         phi=np.array([0.3]),
-        kind=["eq"],
+        role=["eq"],
         lower=np.array([-np.inf]),
         upper=np.array([np.inf]),
     )
@@ -33,8 +33,8 @@ def _problem(**changes: object) -> GaussProblem:
 def test_problem_shapes_and_values_are_checked() -> None:
     with pytest.raises(gp.ShapeError, match="phi has shape"):
         _problem(phi=np.zeros(2))
-    with pytest.raises(gp.ShapeError, match="kind needs one of"):
-        _problem(kind=["equal"])
+    with pytest.raises(gp.ShapeError, match="role needs one of"):
+        _problem(role=["equal"])
     with pytest.raises(gp.NonFiniteError, match="a0 is not finite"):
         _problem(a0=np.array([0.0, np.nan, 0.0]))
     with pytest.raises(gp.ShapeError, match="lower bound exceeds"):
@@ -59,13 +59,13 @@ def test_a_realization_that_cannot_keep_its_constraint(backend: str) -> None:
 def test_dependent_rows_that_contradict_each_other(backend: str) -> None:
     J = np.array([[1.0, 1.0, 0.0], [2.0, 2.0, 0.0]])
     p = _problem(
-        J=J, D=J.T, phi=np.array([0.3, 0.7]), kind=["eq", "eq"], lower=np.full(2, -np.inf), upper=np.full(2, np.inf)
+        J=J, D=J.T, phi=np.array([0.3, 0.7]), role=["eq", "eq"], lower=np.full(2, -np.inf), upper=np.full(2, np.inf)
     )
     with pytest.raises(gp.RealizabilityError, match="dependent and contradict each other"):
         solve_general(p, backend)
     consistent = solve_general(
         _problem(
-            J=J, D=J.T, phi=np.array([0.3, 0.6]), kind=["eq", "eq"], lower=np.full(2, -np.inf), upper=np.full(2, np.inf)
+            J=J, D=J.T, phi=np.array([0.3, 0.6]), role=["eq", "eq"], lower=np.full(2, -np.inf), upper=np.full(2, np.inf)
         ),
         backend,
     )
@@ -79,7 +79,7 @@ def test_contacts_that_cannot_all_hold_are_a_clear_qp_error(backend: str) -> Non
     # an equality a₁ + a₂ = 0.3 with both accelerations pushed ≥ 1 by "contacts" with no force: infeasible
     J = np.array([[1.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     D = np.array([[1.0, 1.0, 0.0]]).T
-    p = _problem(J=J, D=D, phi=np.array([0.3, 1.0, 1.0]), kind=["eq", "ge", "ge"])
+    p = _problem(J=J, D=D, phi=np.array([0.3, 1.0, 1.0]), role=["eq", "ge", "ge"])
     with pytest.raises(gp.QPSolveError, match=r"contradict each other|violates"):
         solve_general(p, backend)
 
@@ -139,8 +139,8 @@ def test_bounded_models_refuse_the_direct_and_compiled_routes() -> None:
         model.step(0.0, [0, 0], [0, 1], solver="direct")
     with pytest.raises(gp.InputError, match="solver='qp'"):
         gp.simulate(model, [0, 0], [0, 1], 1.0, dt=0.01, solver="direct")
-    with pytest.raises(gp.InputError, match="compiled step"):
-        gp.simulate(model, [0, 0], [0, 1], 1.0, dt=0.01, method="rk4-compiled")
+    with pytest.raises(gp.InputError, match="the compiled lane cannot run .* bounded actuators.*lane='python'"):
+        gp.simulate(model, [0, 0], [0, 1], 1.0, dt=0.01, method="rk4", lane="compiled")
 
 
 def test_bounded_simulation_records_saturation_and_keeps_the_bound() -> None:
@@ -225,7 +225,7 @@ def test_contacts_with_casadi_qrqp_in_the_general_problem() -> None:
         D=D,
         J=D.T,
         phi=np.zeros(1),
-        kind=["ge"],
+        role=["ge"],
         lower=np.zeros(1),
         upper=np.full(1, np.inf),
     )
@@ -263,9 +263,9 @@ def test_unknown_backend_lists_the_names() -> None:
 def test_an_uninstalled_backend_is_an_error_not_a_swap(monkeypatch: pytest.MonkeyPatch) -> None:
     """Availability monkeypatched: a known solver that is not installed raises, naming what to install."""
     import gausspp.step.qp as registry
-    from gausspp.step.qp import qpsolvers_route
+    from gausspp.step.qp import qpsolvers_backend
 
-    monkeypatch.setattr(qpsolvers_route, "available", lambda: ["osqp"])
+    monkeypatch.setattr(qpsolvers_backend, "available", lambda: ["osqp"])
     monkeypatch.setattr(registry, "plugin_available", lambda plugin: plugin == "proxqp")
     registry._make.cache_clear()
     try:

@@ -1,5 +1,5 @@
 """The sparse route of the compiled general step (gausspp.step.general.sparse_pattern): a large redundant linkage's
-step in its own sparsity, checked from the problem's data alone and against the Python route.
+step in its own sparsity, checked from the problem's data alone and against the Python step.
 
 The ladder of four double-parallelogram cells (39 coordinates, 42 rows of rank 38: every third bar's rows are
 redundant) is the case; states come from a run up to just before the first collinear position (t = 0.708 s) and
@@ -35,7 +35,7 @@ def ladder() -> tuple[gp.Model, dict, np.ndarray, np.ndarray, np.ndarray]:
 
 
 def call_at(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray):
-    """The compiled call's result at the state (the Python route decided the pattern first), or None."""
+    """The compiled call's result at the state (the Python step decided the pattern first), or None."""
     lam = np.zeros(0)
     general_step.solve_at(model, t, q, v, lam, None)
     fast = general_step.compiled_outputs(model, t, q, v, lam, None, NO_STAB, None, CONSISTENCY_TOL)
@@ -53,7 +53,7 @@ def test_a_large_redundant_linkage_takes_the_sparse_route_and_a_small_one_does_n
 
 def test_the_sparse_step_is_the_gauss_qp_at_every_sample() -> None:
     """From the data alone (numpy): the motion equation, every row kept — the dropped ones too — and stationarity;
-    the acceleration and the reaction agree with the Python route (which shares no factorization with it)."""
+    the acceleration and the reaction agree with the Python step (which shares no factorization with it)."""
     model, _, T, Q, V = ladder()
     lam = np.zeros(0)
     for i in range(T.size):
@@ -103,8 +103,8 @@ def test_the_data_check_fails_on_a_wrong_sparse_answer() -> None:
     size=st.sampled_from([0.0, 1e-12, 1e-9, 1e-6, 1e-3]),
     seed=st.integers(0, 2**16),
 )
-def test_off_the_manifold_the_sparse_step_answers_as_the_python_route(where: int, size: float, seed: int) -> None:
-    """Drifted states: where the flag is up, the acceleration is the Python route's; model.step always is."""
+def test_off_the_manifold_the_sparse_step_answers_as_the_python_step(where: int, size: float, seed: int) -> None:
+    """Drifted states: where the flag is up, the acceleration is the Python step's; model.step always is."""
     model, _, T, Q, V = ladder()
     rng = np.random.default_rng(seed)
     t, lam = float(T[where]), np.zeros(0)

@@ -1,6 +1,6 @@
-"""The impact of ideal rows as one verified QP in ``v⁺`` (:mod:`gausspp.step.impact_qp`) against the general route.
+"""The impact of ideal rows as one verified QP in ``v⁺`` (:mod:`gausspp.step.impact_qp`) against the general step.
 
-The reference is the general Gauss route (:func:`gausspp.step.general.solve_general`: scaled, staged, its own
+The reference is the general Gauss step (:func:`gausspp.step.general.solve_general`: scaled, staged, its own
 rank decisions) on the problem built from the impact's data; the verification is shown to refuse wrong answers.
 """
 
@@ -25,8 +25,8 @@ def _impact_states(name: str) -> list[tuple[float, np.ndarray, np.ndarray]]:
     return [(float(traj.t[i]), traj.q[i], traj.v[i]) for i in first]
 
 
-def _general_route(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(v⁺, impulses of the closed contacts)`` by the general route, from the model's data alone."""
+def _general_step(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(v⁺, impulses of the closed contacts)`` by the general step, from the model's data alone."""
     d = evaluate(model, t, q, v, np.zeros(model.n_lam))
     closed = closed_rows(model, d.gc, None)
     e = model.restitution[closed]
@@ -40,7 +40,7 @@ def _general_route(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray) -> t
 
 
 @pytest.mark.parametrize("name", ["block-on-floor", "bouncing-pendulum"])
-def test_the_fast_impact_is_the_general_routes(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_fast_impact_is_the_general_steps(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
     """Every impact of a 3 s run: the QP in v⁺ answers (not the fallback), and v⁺ and the impulses are the
     general route's to 1e-12 (measured ≤ 2e-14)."""
     model = gp.scenes.get(name).model
@@ -59,7 +59,7 @@ def test_the_fast_impact_is_the_general_routes(name: str, monkeypatch: pytest.Mo
         answered.clear()
         fast = model.impact(t, q, v)
         assert answered == [True]
-        v_ref, p_ref = _general_route(model, t, q, v)
+        v_ref, p_ref = _general_step(model, t, q, v)
         scale = 1.0 + np.abs(v).max()
         np.testing.assert_allclose(fast.v_after, v_ref, rtol=0, atol=1e-12 * scale)
         np.testing.assert_allclose(fast.impulse[fast.closed], p_ref, rtol=0, atol=1e-12 * scale)
@@ -84,8 +84,8 @@ def test_the_verification_refuses_wrong_answers() -> None:
     assert not impact_qp.verified(d.A, v, d.J, e, Jcc, lifted, x, mu, p + 1.0)
 
 
-def test_a_rejected_answer_falls_back_to_the_general_route(monkeypatch: pytest.MonkeyPatch) -> None:
-    """With the verification failing every time, the general route answers and the impact is the same."""
+def test_a_rejected_answer_falls_back_to_the_general_step(monkeypatch: pytest.MonkeyPatch) -> None:
+    """With the verification failing every time, the general step answers and the impact is the same."""
     model = gp.scenes.get("block-on-floor").model
     t, q, v = _impact_states("block-on-floor")[0]
     fast = model.impact(t, q, v)
@@ -94,7 +94,7 @@ def test_a_rejected_answer_falls_back_to_the_general_route(monkeypatch: pytest.M
     np.testing.assert_allclose(slow.v_after, fast.v_after, rtol=0, atol=1e-12 * (1 + np.abs(v).max()))
 
 
-def test_rows_that_are_not_ideal_take_the_general_route() -> None:
+def test_rows_that_are_not_ideal_take_the_general_step() -> None:
     """A realization with its own reaction direction (the crane's servo) is not the QP in v⁺ alone."""
     assert not impact_qp.applies(gp.scenes.get("crane").model)
     assert impact_qp.applies(gp.scenes.get("block-on-floor").model)

@@ -57,14 +57,16 @@ def test_the_same_model_runs_where_the_actuators_stay_independent() -> None:
 
 
 def test_the_compiled_lane_checks_the_margin_at_every_step() -> None:
-    """rk4-compiled records only t = 0 and t = 2 too: the in-graph bound (within √k of σ_min) stops the run."""
+    """rk4 in the compiled lane records only t = 0 and t = 2 too: the in-graph bound (within √k of σ_min) stops the
+    run."""
     model = _turning_actuators()
     traj = gp.simulate(
         model,
         [0.0, 0.0],
         [1.0, 0.5],
         2.0,
-        method="rk4-compiled",
+        method="rk4",
+        lane="compiled",
         dt=0.01,
         solver="direct",
         record=np.array([0.0, 2.0]),

@@ -316,7 +316,7 @@ def test_the_flyball_governor_turns_as_its_one_coordinate_model(offset: float) -
 def test_a_joints_rows_read_the_rotation_alone_not_the_quaternions_norm() -> None:
     """An integrator's stage leaves a spatial body's quaternion off unit length (by its error, ~1e-7 on Bricard's
     default run): the joints' rows must not see it, or the dropped rows' residuals stop following the kept rows' and
-    the compiled step hands ~7 evaluations a step to the Python route (Bricard 10 s: 4.7 → 1.3 s). The rows at a
+    the compiled step hands ~7 evaluations a step to the Python step (Bricard 10 s: 4.7 → 1.3 s). The rows at a
     state with every quaternion scaled by 1.001 are the rows at the state itself; scaled, the unnormalized rotation
     would move them by ~1e-3 (the negative control)."""
     from gausspp.model.mechanism import quaternion_to_matrix

@@ -19,7 +19,7 @@ def _problem() -> GaussProblem:
         D=np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]]),
         J=np.array([[1.0, 1.0, 0.0]]),
         phi=np.array([0.3]),
-        kind=["eq"],
+        role=["eq"],
         lower=np.full(2, -np.inf),
         upper=np.full(2, np.inf),
     )

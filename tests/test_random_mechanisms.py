@@ -1,7 +1,7 @@
 """Random mechanisms (issue 28, item 4): hypothesis builds them — random mass matrices, constraint rows and
 reaction directions, nearly singular and badly scaled ones among them — and every step is either a gausspp
 error or an answer that agrees with the acceleration-space QP assembled from the problem's data alone
-(:func:`gausspp.acceleration_qp`), by both routes. Never another exception.
+(:func:`gausspp.acceleration_qp`), by both solvers. Never another exception.
 
 The mechanism: ``T = ½ vᵀ A v`` with a constant ``A`` (condition number and scale drawn), a constant force ``f``,
 and ``k`` velocity-level rows ``Φ = J v − c`` realized ideally (``D = Jᵀ``) or by forces along ``Mᵀ``.

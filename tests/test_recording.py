@@ -38,7 +38,7 @@ SCENES = {"pendulum": {}, "gyrostat": {}, "planar-chain": {"N": 16}}  # the chai
 @pytest.mark.parametrize("solver", ["direct", "qp"])
 def test_at_once_equals_sample_by_sample(scene, solver):
     sc = gp.scenes.get(scene, **SCENES[scene])
-    traj = gp.simulate(sc.model, sc.q0, sc.v0, 0.5, dt=1e-3, method="rk4-compiled", solver=solver, record=5)
+    traj = gp.simulate(sc.model, sc.q0, sc.v0, 0.5, dt=1e-3, method="rk4", lane="compiled", solver=solver, record=5)
     assert traj.status == "success" and traj.t.size > 50
     (fast, fast_failure, notes), (slow, slow_failure, slow_notes) = both(sc.model, samples_of(sc.model, traj), solver)
     assert fast_failure is None and slow_failure is None and notes == slow_notes
@@ -49,7 +49,7 @@ def test_at_once_equals_sample_by_sample(scene, solver):
 
 def test_a_failing_sample_fails_as_sample_by_sample():
     sc = gp.scenes.get("gyrostat")
-    traj = gp.simulate(sc.model, sc.q0, sc.v0, 0.2, dt=1e-2, method="rk4-compiled", solver="direct")
+    traj = gp.simulate(sc.model, sc.q0, sc.v0, 0.2, dt=1e-2, method="rk4", lane="compiled", solver="direct")
     samples = samples_of(sc.model, traj)
     samples.y[7, 0] = np.nan  # a sample the step cannot evaluate: the recording stops there, as before
     (fast, fast_failure, _), (slow, slow_failure, _) = both(sc.model, samples, "direct")
@@ -64,15 +64,31 @@ def test_a_compiled_qp_run_is_recorded_by_replaying_its_own_qp_solutions(scene):
     again): the same columns as solving each sample's QP anew; a wrong solution would show."""
     sc = gp.scenes.get(scene)
     model = sc.model
-    traj = gp.simulate(model, sc.q0, sc.v0, 0.3, dt=1e-3, method="rk4-compiled", solver="qp", record=7)
+    traj = gp.simulate(model, sc.q0, sc.v0, 0.3, dt=1e-3, method="rk4", lane="compiled", solver="qp", record=7)
     samples = samples_of(model, traj)
     from gausspp.simulation.compiled import integrate_compiled
+    from gausspp.simulation.inputs import check_options
     from gausspp.simulation.methods import get as method
 
     y0 = samples.y[0]
-    t, y, *_, solutions = integrate_compiled(
-        method("rk4-compiled"), model, "qp", None, Stabilization(), 0.0, 0.3, 1e-3, y0, 1e-8, 1e-8, 7
+    opts = check_options(
+        model,
+        method=method("rk4"),
+        t0=0.0,
+        t_end=0.3,
+        dt=1e-3,
+        solver="qp",
+        backend=None,
+        rtol=1e-8,
+        atol=1e-8,
+        record=7,
+        constraint_tol=1e-8,
+        throw=True,
+        rest_speed=0.0,
+        max_events=1000,
+        lane="compiled",
     )
+    t, y, *_, solutions = integrate_compiled(model, opts, stab=Stabilization(), y0=y0)
     assert solutions is not None and np.isfinite(solutions[:-1]).all() and np.isnan(solutions[-1]).all()
     rhs = RightHandSide(model, "qp", None, Stabilization())
     replayed, _, good = rhs.evaluate_all(t, y, solutions)

@@ -235,8 +235,8 @@ def test_the_families_are_redundant_on_the_manifold(families: dict[str, Family])
 
 
 #: States where a backend refused the consistent redundant rows (found by the lead's property scan, reported):
-#: the compiled qpsolvers route raises QPSolveError ("found no solution of the step QP") instead of handing the
-#: singular step to the general QP; quadprog refuses the general QP's nearly singular u-space Hessian.
+#: the qpsolvers family, compiled around, raises QPSolveError ("found no solution of the step QP") instead of handing
+#: the singular step to the general QP; quadprog refuses the general QP's nearly singular u-space Hessian.
 _REFUSED = [
     pytest.param(
         "four-bar oblique",

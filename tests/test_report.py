@@ -15,9 +15,7 @@ from gausspp.studies import report
 
 
 def test_reduced_study_writes_table_data_and_plots(tmp_path: Path) -> None:
-    rows = report.work_precision(
-        ["two-masses", "pendulum"], ["rk4-compiled", "DOP853"], ["direct", gp.qp.DEFAULT], repeats=1
-    )
+    rows = report.work_precision(["two-masses", "pendulum"], ["rk4", "DOP853"], ["direct", gp.qp.DEFAULT], repeats=1)
     assert {r.scene for r in rows} == {"two-masses", "pendulum"} and all(r.status != "failed" for r in rows)
     assert all(r.reference == "exact" for r in rows)
     text = report.table(rows)

@@ -19,7 +19,7 @@ from gausspp.scenes import andrews as an
 # The methods that reach the published accuracy, with their settings (measured: 0.1–0.3 s and 0.6–1.7 s).
 METHODS = {
     "DOP853": dict(method="DOP853", rtol=1e-12, atol=1e-14),
-    "rk4-compiled": dict(method="rk4-compiled", dt=1e-6),
+    "rk4 compiled": dict(method="rk4", lane="compiled", dt=1e-6),
 }
 
 
@@ -172,7 +172,7 @@ def test_angles_at_t_003_match_published_reference(scene: gp.scenes.Scene, name:
     )
     assert err_pub <= 3e-9  # measured 1.43e-9 with both methods: the published values' own error
     assert scd >= 9.0  # measured 9.56
-    assert err_conv <= 1e-11  # measured 4.6e-13 (DOP853), 2.4e-12 (rk4-compiled)
+    assert err_conv <= 1e-11  # measured 4.6e-13 (DOP853), 2.4e-12 (rk4 compiled)
     assert np.max(np.abs(v - an.REFERENCE_V)) <= 1e-6  # andrews.md threshold; measured 5.4e-7
     assert np.max(np.abs(v - an.CONVERGED_V)) <= 1e-8  # measured 1.6e-10, 9.7e-10
     # q̈ and λ: published to 6–7 digits only (threshold 1e-5 relative), converged much better

@@ -261,7 +261,7 @@ def test_general_qp_allocation_is_the_closed_form_least_compulsion(args: tuple, 
         D=M.T,
         J=J,
         phi=phi,
-        kind=["eq"] * k,
+        role=["eq"] * k,
         lower=np.full(m, -np.inf),
         upper=np.full(m, np.inf),
     )
@@ -293,7 +293,7 @@ def _allocation_problem(A: np.ndarray, f: np.ndarray, J: np.ndarray, phi: np.nda
         D=M.T,
         J=J,
         phi=phi,
-        kind=["eq"] * k,
+        role=["eq"] * k,
         lower=np.full(m, -np.inf),
         upper=np.full(m, np.inf),
     )

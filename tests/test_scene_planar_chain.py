@@ -11,7 +11,7 @@ from gausspp.scenes.planar_chain import end
 
 
 def run(scene: gp.scenes.Scene, t_end: float, solver: str = "direct") -> gp.Trajectory:
-    return gp.simulate(scene.model, scene.q0, scene.v0, t_end, dt=1e-3, method="rk4-compiled", solver=solver)
+    return gp.simulate(scene.model, scene.q0, scene.v0, t_end, dt=1e-3, method="rk4", lane="compiled", solver=solver)
 
 
 @pytest.mark.parametrize("N", [1, 2, 5, 8])

@@ -1,6 +1,6 @@
 """The servo scenes of issue 19 (``overhead-crane``, ``spring-chain-servo``): their exact flat solutions are
 motions of their models under their exact forces, on the prescribed paths, from rest to rest, and the one-step
-route cannot step them (the servo is realized tangentially)."""
+solution cannot step them (the servo is realized tangentially)."""
 
 from __future__ import annotations
 
@@ -176,7 +176,7 @@ def test_chain_starts_and_ends_at_rest(n: int) -> None:
         assert abs(scene.forces(t)[0]) < 1e-9 * scale
 
 
-def test_chain_one_step_route_only_for_a_single_mass() -> None:
+def test_chain_one_step_solution_only_for_a_single_mass() -> None:
     """n ≥ 2: the force reaches the last mass through springs, ``J A⁻¹ Mᵀ = 0``; n = 1 is an ordinary servo
     (index 3), whose one-step force is the exact one."""
     for n in range(2, 7):

@@ -1,7 +1,7 @@
-"""``gp.simulate`` routes a servo-constraint reached only through higher derivatives (issue 30, item 1).
+"""``gp.simulate`` runs a servo-constraint reached only through higher derivatives (issue 30, item 1).
 
 References: the scenes' flat solutions (numpy polynomials of the path alone, gausspp/scenes/overhead_crane.py and
-spring_chain_servo.py), as in tests/test_servo_route.py.
+spring_chain_servo.py), as in tests/test_index_reduction.py.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ def _flat(scene: gp.scenes.Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 @pytest.mark.parametrize(("name", "params"), [("overhead-crane", {}), ("spring-chain-servo", {"n": 2})])
 def test_simulate_follows_the_path_and_returns_a_trajectory(name: str, params: dict, tmp_path: Path) -> None:
-    """No extra argument: the servo route runs (lane "servo"), the motion is the flat solution (≤ 1e-8 m; measured
+    """No extra argument: index reduction runs (lane "servo"), the motion is the flat solution (≤ 1e-8 m; measured
     8.2e-10 for the crane at the default rtol), the forces are its (u, ≤ 1e-6 relative; measured 6.4e-9), and the
     result is a Trajectory that gp.verify, save/load and to_xarray take."""
     scene = gp.scenes.get(name, **params)
@@ -56,18 +56,18 @@ def test_record_times_are_the_samples() -> None:
 @pytest.mark.parametrize(
     ("options", "match"),
     [
-        ({"method": "rk4", "dt": 0.01}, "servo route integrates adaptively"),
-        ({"dt": 0.01}, "servo route integrates adaptively"),
+        ({"method": "rk4", "dt": 0.01}, "index reduction integrates adaptively"),
+        ({"dt": 0.01}, "index reduction integrates adaptively"),
         ({"stabilize": "baumgarte"}, "own feedback"),
     ],
 )
-def test_what_the_servo_route_does_not_do_is_refused(options: dict, match: str) -> None:
+def test_what_index_reduction_does_not_do_is_refused(options: dict, match: str) -> None:
     scene = gp.scenes.get("overhead-crane")
     with pytest.raises(gp.InputError, match=match):
         gp.simulate(scene.model, scene.q0, scene.v0, 1.0, **options)
 
 
-def test_one_step_servos_keep_their_route() -> None:
+def test_one_step_servos_keep_their_lane() -> None:
     """A servo the actuators reach at the second derivative (the crane of scene "crane") is stepped as before."""
     scene = gp.scenes.get("crane")
     traj = gp.simulate(scene.model, scene.q0, scene.v0, 1.0)

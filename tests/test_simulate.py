@@ -31,12 +31,14 @@ def test_convergence_order(method: str) -> None:
     assert abs(slope - order) <= 0.5
 
 
-@pytest.mark.parametrize("method", ["rk4", "rk4-compiled", "DOP853"])
+@pytest.mark.parametrize(("method", "lane"), [("rk4", "python"), ("rk4", "compiled"), ("DOP853", None)])
 @pytest.mark.parametrize("realization", ["ideal", "servo"])
-def test_two_masses_exact_quadratic_motion(realization: str, method: str) -> None:
+def test_two_masses_exact_quadratic_motion(realization: str, method: str, lane: str | None) -> None:
     s = gp.scenes.get("two-masses", realization=realization, v=0.3)
     for solver in ("direct", "qp"):
-        traj = gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.05, method=method, solver=solver, rtol=1e-12, atol=1e-14)
+        traj = gp.simulate(
+            s.model, s.q0, s.v0, 1.0, dt=0.05, method=method, lane=lane, solver=solver, rtol=1e-12, atol=1e-14
+        )
         for t, q, v in zip(traj.t, traj.q, traj.v, strict=True):
             qe, ve = s.exact(t)
             np.testing.assert_allclose(q, qe, rtol=0, atol=1e-12)
@@ -61,15 +63,16 @@ def collapsing_model() -> gp.Model:
     return gp.Model(mech, gp.Constraint(lambda q, v, t: v[1], name="hold"))
 
 
-@pytest.mark.parametrize("method", ["rk4", "RK45", "rk4-compiled"])
-def test_failure_midway_keeps_the_prefix(method: str) -> None:
+@pytest.mark.parametrize(("method", "lane"), [("rk4", "python"), ("RK45", None), ("rk4", "compiled")])
+def test_failure_midway_keeps_the_prefix(method: str, lane: str | None) -> None:
     model = collapsing_model()
-    traj = gp.simulate(model, [0.0, 0.0], [1.0, 0.0], 2.0, dt=0.01, method=method, solver="direct", throw=False)
+    options = dict(dt=0.01, method=method, lane=lane, solver="direct")
+    traj = gp.simulate(model, [0.0, 0.0], [1.0, 0.0], 2.0, throw=False, **options)
     assert traj.status == "failed" and not traj.success
     assert len(traj) > 10 and 0.9 < traj.t[-1] < 1.0  # everything before the collapse at t = 1
     assert "t=" in traj.message
     with pytest.raises(gp.GaussppError) as info:
-        gp.simulate(model, [0.0, 0.0], [1.0, 0.0], 2.0, dt=0.01, method=method, solver="direct")
+        gp.simulate(model, [0.0, 0.0], [1.0, 0.0], 2.0, **options)
     kept = info.value.trajectory  # type: ignore[attr-defined]
     assert kept.status == "failed" and len(kept) == len(traj)
 
@@ -105,7 +108,7 @@ def test_baumgarte_and_projection_control_drift() -> None:
 
 def test_suslov_drift_over_1e5_rk4_steps() -> None:
     s = gp.scenes.get("rigid-body-servo")
-    kwargs = dict(dt=1e-3, method="rk4-compiled", solver="direct", record=1000)
+    kwargs = dict(dt=1e-3, method="rk4", lane="compiled", solver="direct", record=1000)
     raw = gp.simulate(s.model, s.q0, s.v0, 100.0, **kwargs)
     stab = gp.simulate(s.model, s.q0, s.v0, 100.0, stabilize="project", **kwargs)
     assert raw.steps == stab.steps == 100_000
@@ -137,13 +140,21 @@ def test_bad_arguments() -> None:
     with pytest.raises(gp.InputError, match="needs solver='direct'"):
         gp.simulate(s.model, s.q0, s.v0, 1.0, method="cvodes", solver="qp")
     with pytest.raises(gp.InputError, match="compiled lane needs"):
-        gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.1, method="rk4-compiled", backend="qpsolvers:osqp")
+        gp.simulate(s.model, s.q0, s.v0, 1.0, dt=0.1, method="rk4", lane="compiled", backend="qpsolvers:osqp")
 
 
 @pytest.mark.parametrize("solver", ["direct", "qp"])
 def test_compiled_lane_failure_keeps_prefix(solver: str) -> None:
     traj = gp.simulate(
-        collapsing_model(), [0.0, 0.0], [1.0, 0.0], 2.0, dt=0.01, method="rk4-compiled", solver=solver, throw=False
+        collapsing_model(),
+        [0.0, 0.0],
+        [1.0, 0.0],
+        2.0,
+        dt=0.01,
+        method="rk4",
+        lane="compiled",
+        solver=solver,
+        throw=False,
     )
     assert traj.status == "failed" and 0.9 < traj.t[-1] < 1.0 and len(traj) > 10
 
@@ -152,14 +163,19 @@ def test_compiled_lane_failure_keeps_prefix(solver: str) -> None:
 def test_lane_rules_answer_front_ends_as_simulate_does() -> None:
     from gausspp.simulation import lanes
 
-    cvodes, compiled, rk4 = (gp.methods.get(m) for m in ("cvodes", "rk4-compiled", "rk4"))
+    cvodes, rk4 = (gp.methods.get(m) for m in ("cvodes", "rk4"))
     assert not lanes.accepts(cvodes, "qp") and lanes.accepts(cvodes, "direct")
     assert lanes.default_solver(cvodes) == "direct" and lanes.default_solver(rk4) == "qp"
-    assert lanes.accepts(compiled, "qp", "casadi:qrqp") and not lanes.accepts(compiled, "qp", "qpsolvers:osqp")
+    assert lanes.accepts(rk4, "qp", "casadi:qrqp", lane="compiled")
+    assert not lanes.accepts(rk4, "qp", "qpsolvers:osqp", lane="compiled") and lanes.accepts(
+        rk4, "qp", "qpsolvers:osqp"
+    )
     assert not lanes.accepts(rk4, "qp", kind="contacts") and lanes.accepts(
         gp.methods.get("DOP853"), "qp", kind="contacts"
     )
-    assert not lanes.accepts(compiled, "qp", kind="general") and not lanes.accepts(rk4, "direct", kind="general")
+    assert not lanes.accepts(rk4, "qp", kind="general", lane="compiled") and not lanes.accepts(
+        rk4, "direct", kind="general"
+    )
     s = gp.scenes.get("two-masses")
     with pytest.raises(gp.InputError, match=r"stabilize='project' is not supported by method='cvodes'"):
         gp.simulate(s.model, s.q0, s.v0, 0.1, method="cvodes", solver="direct", stabilize="project")
@@ -169,7 +185,7 @@ def test_simulation_writes_no_attribute_into_the_model() -> None:
     """Compiled runs, projections, Jacobians, phase models and gap functions live in the model's workspace."""
     s = gp.scenes.get("pendulum")
     before = set(vars(s.model))
-    gp.simulate(s.model, s.q0, s.v0, 0.05, dt=0.01, method="rk4-compiled", stabilize="project")
+    gp.simulate(s.model, s.q0, s.v0, 0.05, dt=0.01, method="rk4", lane="compiled", stabilize="project")
     gp.simulate(s.model, s.q0, s.v0, 0.05, method="Radau", solver="direct")
     gp.simulate(s.model, s.q0, s.v0, 0.05, dt=0.01, stabilize="project")
     assert set(vars(s.model)) == before and vars(s.model).get("_projection") is None
@@ -195,14 +211,15 @@ def test_trajectories_record_the_contact_gaps() -> None:
 # -- the lane is gausspp's choice: a method names the integrator ------------------------------------
 @pytest.mark.parametrize("solver", ["direct", "qp"])
 def test_rk4_runs_compiled_with_the_numbers_of_the_lanes_it_replaces(solver: str) -> None:
-    """``method="rk4"`` runs in the compiled lane (as ``rk4-compiled``); the Python lane, asked for by name, steps
-    the same RK4: the three trajectories agree to round-off (scaled by the size of the state)."""
+    """``method="rk4"`` runs in the compiled lane (where ``lane="compiled"`` insists on running it); the Python lane,
+    asked for by name, steps the same RK4: the three trajectories agree to round-off (scaled by the size of the
+    state)."""
     s = gp.scenes.get("pendulum")
     runs = {
         name: gp.simulate(s.model, s.q0, s.v0, 0.5, dt=1e-3, solver=solver, **options)
         for name, options in {
             "rk4": dict(method="rk4"),
-            "rk4-compiled": dict(method="rk4-compiled"),
+            "compiled": dict(method="rk4", lane="compiled"),
             "python": dict(method="rk4", lane="python"),
         }.items()
     }
@@ -243,3 +260,13 @@ def test_the_shortest_call_integrates_adaptively_to_the_tolerances() -> None:
     assert np.max(np.abs(traj.q[-1] - fine.q[-1])) < 1e-8
     loose = gp.simulate(s.model, s.q0, s.v0, 0.5, rtol=1e-4, atol=1e-6)
     assert loose.steps < traj.steps  # the tolerances are the given ones
+
+
+def test_the_retired_method_name_is_refused_with_what_to_write() -> None:
+    """``rk4-compiled`` named a lane, not an integrator: refused with ``method='rk4'`` and ``lane='compiled'``."""
+    s = gp.scenes.get("pendulum")
+    with pytest.raises(
+        gp.UnknownNameError, match=r"method='rk4-compiled' is gone: write method='rk4'.*lane='compiled'"
+    ):
+        gp.simulate(s.model, s.q0, s.v0, 0.1, dt=0.01, method="rk4-compiled")
+    assert "rk4-compiled" not in gp.methods.names()

@@ -15,7 +15,7 @@ import gausspp as gp
 from gausspp.step import sparse
 
 FIELDS = ("a", "u", "reaction", "compulsion", "S_norm", "residual", "a_free", "qdot", "power_reaction")
-# servo scenes: no one-step route; robot scenes: the robots extra (tests/test_robot_scenes.py)
+# servo scenes: no one-step solution; robot scenes: the robots extra (tests/test_robot_scenes.py)
 ONE_STEP = [n for n in gp.scenes.names() if n not in gp.scenes.names("servo") + gp.scenes.names("robot")]
 SCENES = [n for n in ONE_STEP if not (gp.scenes.get(n).model.contacts or gp.scenes.get(n).model.bounded)]
 #: Scenes whose rows are redundant at their initial state (J A⁻¹ D singular): no direct step, the QP steps them.

@@ -405,9 +405,10 @@ def test_redundant_nearly_dependent_rows_qp_answers_the_minimal_model() -> None:
 
 def test_redundant_constraints_simulate_direct_refuses_and_qp_follows_the_minimal_model() -> None:
     scene, model = redundant.pendulum_with_distance()
-    for method in ("rk4", "rk4-compiled", "DOP853"):
+    for method, lane in (("rk4", "python"), ("rk4", "compiled"), ("DOP853", None)):
         with pytest.raises(gp.RealizabilityError, match=r"redundant"):
-            gp.simulate(model, scene.q0, scene.v0, 1.0, dt=0.01, method=method, solver="direct", stabilize="project")
+            options = dict(dt=0.01, method=method, lane=lane, solver="direct", stabilize="project")
+            gp.simulate(model, scene.q0, scene.v0, 1.0, **options)
     q, v = redundant.pendulum_state(0.0, 0.0, stretch=1e-3)  # off the manifold: the projection needs the QP's rows
     with pytest.raises(gp.InitialDataError, match=r"projecting .* failed .*redundant"):
         gp.simulate(model, q, v, 1.0, dt=0.01, solver="direct", stabilize="project")
@@ -416,7 +417,7 @@ def test_redundant_constraints_simulate_direct_refuses_and_qp_follows_the_minima
     assert traj.success and traj.q.shape == ref.q.shape
     assert np.max(np.abs(traj.q - ref.q)) <= 1e-8  # measured 1e-10 (relative, over 1 s)
     with pytest.raises(gp.InputError, match=r"redundant"):  # the compiled integrator has no general QP
-        gp.simulate(model, scene.q0, scene.v0, 1.0, dt=0.01, method="rk4-compiled", stabilize="project")
+        gp.simulate(model, scene.q0, scene.v0, 1.0, dt=0.01, method="rk4", lane="compiled", stabilize="project")
 
 
 # -- 6. initial data off the constraint -------------------------------------------------------------

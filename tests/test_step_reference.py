@@ -9,7 +9,7 @@ solved by an exact active-set code of qpsolvers (daqp, else quadprog: never the 
 shares no casadi graph, no Cholesky or LDLᵀ factor, no reaction-space unknowns and no refinement with the routes it
 judges: the dense and the sparse elimination, each by the direct formula and by the compiled QP (casadi's qrqp in
 the graph, and OSQP called from Python), each raw (``refine=False``) and refined, and the general Gauss QP (its
-Python route and its compiled call). Distances are relative to the problem's size,
+Python step and its compiled call). Distances are relative to the problem's size,
 ``‖a − a_ref‖ / max(‖a_ref‖, ‖a₀‖, ‖A⁻¹f‖)``, and each case's tolerance sits a few orders above the agreement
 measured on it (written beside it). Every comparison has a negative control: the same check on a deliberately wrong
 answer ``a₀ + A⁻¹D(0.9 u)`` — the route's own reaction, 10 % short — must fail it. Where ``cond A = 1e8`` the exact
@@ -255,7 +255,7 @@ def margin(d: gp.StepProblem) -> float:
 
 # -- the routes ---------------------------------------------------------------------------------------------------
 def general_compiled(model: gp.Model, s: State) -> gp.StepResult:
-    """The general Gauss QP's compiled call (the first call decides the pattern by the Python route and compiles it)."""
+    """The general Gauss QP's compiled call (the first call decides the pattern by the Python step and compiles it)."""
     model.general_step(s.t, s.q, s.v, s.lam)
     lam = np.zeros(0) if s.lam is None else np.asarray(s.lam, float)
     fast = compiled_outputs(model, s.t, s.q, s.v, lam, None, np.zeros(2))
@@ -276,7 +276,7 @@ def answers(case: Case, s: State, compiled_general: bool = True) -> dict[str, gp
                 out[name] = model.step(s.t, s.q, s.v, s.lam, solver=solver, backend=backend, refine=refine)
     model = model_for(case, "dense")  # the general QP does not depend on the equality step's route
     lam = np.zeros(0) if s.lam is None else np.asarray(s.lam, float)
-    out["general (Python route)"] = solve_at(model, s.t, s.q, s.v, lam, None, compiled=False)[0]
+    out["general (Python step)"] = solve_at(model, s.t, s.q, s.v, lam, None, compiled=False)[0]
     if compiled_general:
         out["general (compiled)"] = general_compiled(model, s)
     return out
@@ -298,7 +298,7 @@ def check_against_reference(case: Case, s: State, compiled_general: bool = True)
 @needs_reference
 @pytest.mark.parametrize("case", CASES, ids=str)
 def test_every_route_agrees_with_the_reference_on_the_constraint(case: Case) -> None:
-    """At the case's state on its constraints: every route, raw and refined, the general QP's Python route and
+    """At the case's state on its constraints: every route, raw and refined, the general QP's Python step and
     its compiled call, within the case's tolerance of the reference; each with its negative control, and for a
     realization other than the ideal one, the ideal realization's answer (another motion) fails the same check."""
     model, s = built(case)
@@ -329,7 +329,7 @@ def perturbed(case: Case, seed: int, size: float) -> State:
 @given(seed=st.integers(0, 2**32 - 1), size=st.floats(0.01, 1.0))
 def test_every_route_agrees_with_the_reference_off_the_constraint(case: Case, seed: int, size: float) -> None:
     """States off the constraint manifold (Φ ≠ 0, g ≠ 0): the same agreement, raw and refined, for every equality
-    route and the general QP's Python route. (Its compiled call damps the step off the manifold, away from the Gauss
+    route and the general QP's Python step. (Its compiled call damps the step off the manifold, away from the Gauss
     step: :func:`test_the_compiled_general_step_is_the_gauss_step_off_the_constraint`.)"""
     s = perturbed(case, seed, size)
     d = model_for(case, "dense").step_data(s.t, s.q, s.v, s.lam)
@@ -510,7 +510,7 @@ class Exact:
     reference: float
     raw: float  # the equality routes with refine=False
     refined: float
-    general: float  # the general QP's Python route (no refinement; its compiled call only on the constraint)
+    general: float  # the general QP's Python step (no refinement; its compiled call only on the constraint)
 
 
 EXACT = [  # measured at 300 states each (comments: reference, raw, refined, general)
@@ -565,7 +565,7 @@ def test_ill_conditioned_steps_against_the_exact_solution(tol: Exact, seed: int,
 @needs_reference
 def test_the_compiled_general_step_is_the_gauss_step_off_the_constraint() -> None:
     """The general QP's compiled call (what ``model.general_step`` answers from its second call on, and ``model.step``
-    for redundant rows) against the reference at a state off the crane's servo path, where its Python route agrees.
+    for redundant rows) against the reference at a state off the crane's servo path, where its Python step agrees.
     Found here: its damping near singular positions, ``drift·b²/(b² + σ⁴)``, reached this state far from one (margin
     0.06) and put the answer 2.5e-6 off with the all-clear flag up; with ``drift·b⁴/(b⁴ + σ⁸)`` it is round-off."""
     case = next(c for c in CASES if c.name == "force: crane")

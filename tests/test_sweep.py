@@ -228,7 +228,8 @@ def test_scene_name_runs_the_default_scene_task(tmp_path: Path) -> None:
 def test_every_scene_runs_with_the_default_task() -> None:
     from gausspp import scenes
 
-    # every scene with a one-step route (not the servo scenes); contact and bounded-actuator ones get DOP853 and the QP
+    # every scene with a one-step solution (not the servo scenes); contact and bounded-actuator ones get DOP853 and
+    # the QP
     for name in scenes.names("equality") + scenes.names("general"):
         res = sweep(name, [{"t_end": 0.01}], executor="serial", progress=False)
         assert res.ok, (name, res.errors)
@@ -297,7 +298,7 @@ def test_work_precision_sweep_gives_the_report_rows() -> None:
 
     from gausspp.studies import report, sweeps
 
-    config = (["two-masses", "mixed-rate"], ["rk4", "rk4-compiled", "DOP853"], ["direct", "casadi:qrqp"])
+    config = (["two-masses", "mixed-rate"], ["rk4", "DOP853"], ["direct", "casadi:qrqp"])
     expected = report.work_precision(*config, repeats=1)
     with ProcessPoolExecutor(2) as pool:
         rows, res = sweeps.work_precision(*config, repeats=1, executor=pool, progress=False)
@@ -310,7 +311,7 @@ def test_work_precision_sweep_gives_the_report_rows() -> None:
         return d
 
     assert [same(r) for r in rows] == [same(r) for r in expected]  # bitwise, through JSON and workers
-    assert any(r.reference.startswith("rk4-compiled") for r in rows)  # mixed-rate: the computed reference
+    assert any(r.reference.startswith("rk4 (compiled)") for r in rows)  # mixed-rate: the computed reference
     with pytest.raises(UnknownNameError, match="solver 'nope'"):
         sweeps.work_precision(["two-masses"], ["rk4"], ["nope"])
 

@@ -305,7 +305,7 @@ def _margin(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray) -> float:
 
 
 def test_underactuated_arm_follows_the_path_while_the_margin_holds(tmp_path: Path) -> None:
-    """Two motors, a passive elbow, a tip path of 2 coordinates: ``J A⁻¹ D`` is 2 × 2, the direct route.
+    """Two motors, a passive elbow, a tip path of 2 coordinates: ``J A⁻¹ D`` is 2 × 2, the direct formula.
 
     On [0, 0.5] s the margin stays near 0.4, the run succeeds, the torques are Pinocchio's RNEA with a zero
     elbow torque, and ``gp.verify`` accepts. Continued, the passive elbow is dragged towards a configuration

@@ -37,7 +37,9 @@ def horizon(name: str, scene: gp.scenes.Scene) -> float:
     return HORIZON.get(name, min(scene.t_end, 0.6))
 
 
-@pytest.mark.parametrize("name", gp.scenes.names("equality") + gp.scenes.names("general"))  # servo: no one-step route
+@pytest.mark.parametrize(
+    "name", gp.scenes.names("equality") + gp.scenes.names("general")
+)  # servo: no one-step solution
 def test_every_scene_is_a_motion(name: str) -> None:
     """Every scene's run passes the integral principle (no scene is refused: a refusal fails here)."""
     scene = gp.scenes.get(name)

@@ -193,7 +193,7 @@ recorded are not run again. For a dask cluster use gausspp.sweep from Python.
 examples:
   gausspp sweep realizability --resolution 1 --out margins.jsonl
   gausspp sweep work-precision --out report
-  gausspp sweep work-precision --scenes pendulum crane --methods rk4-compiled DOP853 --solvers direct"""
+  gausspp sweep work-precision --scenes pendulum crane --methods rk4 DOP853 --solvers direct"""
 
 
 def _add_demo(sub: Any, common: Parser) -> None:
@@ -342,7 +342,7 @@ def _add_sweep(sub: Any, common: Parser) -> None:
         nargs="+",
         metavar="METHOD",
         choices=methods.names(),
-        help="work-precision: only these methods (default: rk4 rk4-compiled DOP853 Radau cvodes)",
+        help="work-precision: only these methods (default: rk4 DOP853 Radau cvodes)",
     )
     swp.add_argument(
         "--solvers",

@@ -61,11 +61,11 @@ def run_phase(
     modes: Modes,
     t: float,
     y: np.ndarray,
+    *,
     t_end: float,
     h: float,
     times: np.ndarray | None,
     record: Record,
-    *,
     codegen: bool = False,
 ) -> tuple[float, np.ndarray, list[tuple[str, int]]]:
     """Step the phase of ``modes`` from ``(t, y)`` until an event or ``t_end``; record its samples (every step, or
@@ -95,16 +95,7 @@ def run_phase(
     keep(np.array([t]), y[:, None], out0)
     before = graph.split(out0)[3].ravel()
     while True:
-        n_full = int(np.floor((t_end - t) / h * (1.0 + 1e-12)))
-        if n_full >= 1:
-            m = min(CHUNK, n_full)
-            Y, out, jump = (x.full()[:, :m] for x in chunk(y, d, h))
-            ts = t + h * np.arange(1, m + 1)
-            if m == n_full and t_end - ts[-1] <= 1e-12 * (1.0 + abs(t_end)):
-                ts[-1] = t_end
-        else:
-            y1, out1, jump1 = step(y, d, t_end - t)
-            Y, out, jump, ts = y1.full(), out1.full(), jump1.full(), np.array([t_end])
+        ts, Y, out, jump = _advance(step, chunk, y, d, t, t_end, h)
         bad = ~(np.isfinite(Y).all(axis=0) & np.isfinite(out).all(axis=0)) | ~(jump[0] <= MAX_JUMP)
         values = graph.split(out)[3]
         fire = falls(np.column_stack([before, values[:, :-1]]), values).any(axis=0)
@@ -128,15 +119,7 @@ def run_phase(
             continue
         t0, y0 = float(starts[first]), (Y[:, first - 1] if first else y).copy()
         start_values = before if first == 0 else values[:, first - 1]
-        hit = np.flatnonzero(falls(start_values, values[:, first]))
-        h_step = float(ts[first] - t0)
-
-        def value(hh: float, k: int, y0: np.ndarray = y0) -> float:
-            return float(step(y0, d, hh)[1].full()[-len(graph.events) + k, 0])
-
-        roots = {int(k): _root(lambda hh, k=k: value(hh, k), h_step) for k in hit}
-        h_star = min(roots.values())
-        fired = [graph.events[k] for k, r in roots.items() if r <= h_star + 1e-12 * (1.0 + h_step)]
+        h_star, fired = _first_event(step, graph, d, y0, float(ts[first] - t0), start_values, values[:, first])
         sample(t0, y0, t0 + h_star)
         y1, out1, jump1 = step(y0, d, h_star)
         y_star = y1.full().ravel()
@@ -144,6 +127,38 @@ def run_phase(
             _refuse(t0 + h_star, h, names, y_star, out1.full().ravel(), float(jump1))
         keep(np.array([t0 + h_star]), y_star[:, None], out1.full())
         return t0 + h_star, y_star, fired
+
+
+def _advance(
+    step: Any, chunk: Any, y: np.ndarray, d: np.ndarray, t: float, t_end: float, h: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The next steps from ``(t, y)``: a chunk of steps of ``h`` (as many as fit before ``t_end``), or the last,
+    shorter one; their end times, states, outputs and jumps (one column per step)."""
+    n_full = int(np.floor((t_end - t) / h * (1.0 + 1e-12)))
+    if n_full < 1:
+        y1, out1, jump1 = step(y, d, t_end - t)
+        return np.array([t_end]), y1.full(), out1.full(), jump1.full()
+    m = min(CHUNK, n_full)
+    Y, out, jump = (x.full()[:, :m] for x in chunk(y, d, h))
+    ts = t + h * np.arange(1, m + 1)
+    if m == n_full and t_end - ts[-1] <= 1e-12 * (1.0 + abs(t_end)):
+        ts[-1] = t_end
+    return ts, Y, out, jump
+
+
+def _first_event(
+    step: Any, graph: PhaseGraph, d: np.ndarray, y0: np.ndarray, h_step: float, before: np.ndarray, after: np.ndarray
+) -> tuple[float, list[tuple[str, int]]]:
+    """Inside the step of ``h_step`` from ``y0`` where the events' values go from ``before`` to ``after``: the length
+    ``h*`` at which the first of those that fall reaches zero, and every event that falls there."""
+
+    def value(hh: float, k: int) -> float:
+        return float(step(y0, d, hh)[1].full()[-len(graph.events) + k, 0])
+
+    hit = np.flatnonzero(falls(before, after))
+    roots = {int(k): _root(lambda hh, k=k: value(hh, k), h_step) for k in hit}
+    h_star = min(roots.values())
+    return h_star, [graph.events[k] for k, r in roots.items() if r <= h_star + 1e-12 * (1.0 + h_step)]
 
 
 def _refuse(t: float, h: float, names: tuple[str, ...], y: np.ndarray, out: np.ndarray, jump: float) -> None:

@@ -11,6 +11,7 @@ normal velocity, Coulomb's law on the impulses: :func:`impact`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import casadi as ca
@@ -107,6 +108,16 @@ class _Runner:
         event.terminal, event.direction, event.what = True, -1, what  # type: ignore[attr-defined]
         return event
 
+    def check_start(self, q: np.ndarray, v: np.ndarray) -> None:
+        """Refuse initial data that cannot be stepped (:meth:`ContactKinematics.checked`) or penetrate a contact."""
+        gaps = self.kin.checked(q, v, 0.0, self.names).g
+        if np.any(gaps < -CONTACT_TOL * (1.0 + np.abs(q).max())):
+            i = int(np.argmin(gaps))
+            raise InitialDataError(
+                f"initial data penetrate the contact {self.names[i]!r} at t=0: g = {gaps[i]:.3g} < 0; start with "
+                "every gap g ≥ 0"
+            )
+
     # -- modes at an event --------------------------------------------------------------------------------------
     def modes_at(
         self, t: float, q: np.ndarray, v: np.ndarray, fired: tuple[tuple[str, int], ...] = ()
@@ -133,7 +144,18 @@ class _Runner:
                 forced[i] = (SLIDE, OPEN)
             elif kind == "lifts off":
                 forced[i] = (OPEN,)
-        modes, sol = choose(st, self.contacts, candidates, slipping, x0, st.phin, st.phit, t, tol, forced)
+        modes, sol = choose(
+            st,
+            self.contacts,
+            candidates,
+            slipping,
+            x0=x0,
+            target_n=st.phin,
+            target_t=st.phit,
+            t=t,
+            tol=tol,
+            forced=forced,
+        )
         return modes, v, sol
 
     def impact(self, t: float, st: ContactState, touching: list[int], v: np.ndarray) -> np.ndarray:
@@ -143,7 +165,9 @@ class _Runner:
         target_t = [np.zeros_like(si) for si in st.s]
         # every contact may stick, slide or open in an impact: Coulomb's law on the impulses, the tangential one
         # against the slip it would otherwise have to stop
-        _, sol = choose(st, self.contacts, touching, {}, v, target_n, target_t, t, CONTACT_TOL)
+        _, sol = choose(
+            st, self.contacts, touching, {}, x0=v, target_n=target_n, target_t=target_t, t=t, tol=CONTACT_TOL
+        )
         return sol.x
 
 
@@ -171,8 +195,63 @@ def simulate_friction(
     ``h`` takes RK4 steps of ``h`` compiled into one casadi graph per phase, each event located exactly inside its
     step (:mod:`.fixed_step`: a time-stepping cost per step, the events kept); with ``codegen=True`` each phase's
     steps run as C where a compiler is (:mod:`gausspp.c_code`: built once per phase, kept on disk).
-    ``record``: increasing times to
-    sample at (besides the events); default every step the integrator takes."""
+    ``record``: increasing times to sample at (besides the events); default every step the integrator takes."""
+    runner = _runner(system, contacts)
+    q = array("simulate_friction", "q0", q0).ravel()
+    v = array("simulate_friction", "v0", v0).ravel()
+    if q.size != runner.nq or v.size != runner.nv:
+        raise ShapeError(f"simulate_friction: q0 needs {runner.nq} entries and v0 {runner.nv}, got {q.size}, {v.size}")
+    opts = FrictionOptions.checked(t_end, step, codegen, rtol, atol, max_events, record)
+    rec = Record(runner.nq, runner.nv, len(runner.contacts), int(sum(runner.kin.dims)))
+    events: list[dict[str, Any]] = []
+    failure: Exception | None = None
+    try:
+        runner.check_start(q, v)
+        (_adaptive if opts.step is None else _fixed_step)(runner, q, v, opts=opts, rec=rec, events=events)
+    except GaussppError as exc:
+        failure = exc
+    run = rec.run(tuple(runner.names), events)
+    if failure is not None:
+        run.status, run.message, run.failure = "failed", f"{type(failure).__name__}: {failure}", failure
+        if throw:
+            failure.run = run  # type: ignore[attr-defined]
+            raise failure
+    return run
+
+
+@dataclass(frozen=True)
+class FrictionOptions:
+    """The checked options of :func:`simulate_friction` (see there), as they flow to the phases."""
+
+    t_end: float
+    step: float | None
+    codegen: bool
+    rtol: float
+    atol: float
+    max_events: int
+    times: np.ndarray | None
+
+    @classmethod
+    def checked(
+        cls, t_end: Any, step: Any, codegen: Any, rtol: Any, atol: Any, max_events: Any, record: Any
+    ) -> FrictionOptions:
+        times = None if record is None else array("simulate_friction", "record", record).ravel()
+        if times is not None and (np.any(np.diff(times) <= 0) or times.size == 0):
+            raise InputError("simulate_friction: record must be increasing times")
+        return cls(
+            t_end=float(positive("t_end", t_end)),
+            step=None if step is None else float(positive("step", step)),
+            codegen=flag("simulate_friction", "codegen", codegen),
+            rtol=float(positive("rtol", rtol)),
+            atol=float(positive("atol", atol)),
+            max_events=int(positive("max_events", max_events)),
+            times=times,
+        )
+
+
+def _runner(system: Mechanism | Model, contacts: list[FrictionContact]) -> _Runner:
+    """The runner of ``system``'s mechanism and ``contacts`` (checked), kept in the mechanism's workspace with its
+    compiled phases for the next run."""
     mech = system.mechanism if isinstance(system, Model) else system
     if isinstance(system, Model) and system.k:
         raise InputError("simulate_friction takes a mechanism (or a model without constraint rows)")
@@ -182,42 +261,7 @@ def simulate_friction(
     if not contacts or not all(isinstance(c, FrictionContact) for c in contacts):
         raise InputError("contacts must be a non-empty list of gp.FrictionContact")
     key = ("friction-runner", *((c, c.gap, c.slip, c.mu, c.mu_static, c.restitution) for c in contacts))
-    runner = workspace(mech).get(key, lambda: _Runner(mech, contacts))  # its compiled phases kept for the next run
-    q = array("simulate_friction", "q0", q0).ravel()
-    v = array("simulate_friction", "v0", v0).ravel()
-    if q.size != runner.nq or v.size != runner.nv:
-        raise ShapeError(f"simulate_friction: q0 needs {runner.nq} entries and v0 {runner.nv}, got {q.size}, {v.size}")
-    t_end = float(positive("t_end", t_end))
-    rtol, atol = float(positive("rtol", rtol)), float(positive("atol", atol))
-    h = None if step is None else float(positive("step", step))
-    codegen = flag("simulate_friction", "codegen", codegen)
-    times = None if record is None else array("simulate_friction", "record", record).ravel()
-    if times is not None and (np.any(np.diff(times) <= 0) or times.size == 0):
-        raise InputError("simulate_friction: record must be increasing times")
-    rec = Record(runner.nq, runner.nv, len(contacts), int(sum(runner.kin.dims)))
-    events: list[dict[str, Any]] = []
-    failure: Exception | None = None
-    try:
-        gaps = runner.kin.checked(q, v, 0.0, runner.names).g
-        if np.any(gaps < -CONTACT_TOL * (1.0 + np.abs(q).max())):
-            i = int(np.argmin(gaps))
-            raise InitialDataError(
-                f"initial data penetrate the contact {contacts[i].name!r} at t=0: g = {gaps[i]:.3g} < 0; start with "
-                "every gap g ≥ 0"
-            )
-        if h is None:
-            _adaptive(runner, q, v, t_end, rtol, atol, times, max_events, rec, events)
-        else:
-            _fixed_step(runner, q, v, t_end, h, codegen, times, max_events, rec, events)
-    except GaussppError as exc:
-        failure = exc
-    run = rec.run(tuple(c.name for c in contacts), events)
-    if failure is not None:
-        run.status, run.message, run.failure = "failed", f"{type(failure).__name__}: {failure}", failure
-        if throw:
-            failure.run = run  # type: ignore[attr-defined]
-            raise failure
-    return run
+    return workspace(mech).get(key, lambda: _Runner(mech, contacts))
 
 
 def _next_modes(
@@ -234,58 +278,42 @@ def _next_modes(
 
 
 def _fixed_step(
-    runner: _Runner,
-    q: np.ndarray,
-    v: np.ndarray,
-    t_end: float,
-    h: float,
-    codegen: bool,
-    times: Any,
-    max_events: int,
-    rec: Record,
-    events: list,
+    runner: _Runner, q: np.ndarray, v: np.ndarray, *, opts: FrictionOptions, rec: Record, events: list
 ) -> None:
     """Phases of compiled RK4 steps of ``h`` (:func:`.fixed_step.run_phase`), event to event."""
     phases = runner.phases
     modes, v, _ = runner.modes_at(0.0, q, v)
     t, y = 0.0, np.concatenate([q, v])
     while True:
-        t, y, fired = run_phase(phases, modes, t, y, t_end, h, times, rec, codegen=codegen)
+        t, y, fired = run_phase(
+            phases, modes, t, y, t_end=opts.t_end, h=opts.step, times=opts.times, record=rec, codegen=opts.codegen
+        )
         if not fired:
             return
-        modes, y = _next_modes(runner, t, y, fired, max_events, events)
+        modes, y = _next_modes(runner, t, y, fired, opts.max_events, events)
 
 
 def _adaptive(
-    runner: _Runner,
-    q: np.ndarray,
-    v: np.ndarray,
-    t_end: float,
-    rtol: float,
-    atol: float,
-    times: Any,
-    max_events: int,
-    rec: Record,
-    events: list,
+    runner: _Runner, q: np.ndarray, v: np.ndarray, *, opts: FrictionOptions, rec: Record, events: list
 ) -> None:
     """Phases integrated by scipy (DOP853, or Radau where a two-component slip slides), event to event."""
     from scipy.integrate import solve_ivp  # imported here: ``import gausspp`` does not load scipy's integrators
 
-    t = 0.0
+    t, times = 0.0, opts.times
     modes, v, _ = runner.modes_at(t, q, v)
     y = np.concatenate([q, v])
-    while t < t_end:
+    while t < opts.t_end:
         check_painleve(runner.kin(*runner.split(y)), runner.contacts, modes, t)
         watched = runner.events(modes)
         sol = solve_ivp(
             runner.rhs(modes),
-            (t, t_end),
+            (t, opts.t_end),
             y,
             method=runner.method(modes),
-            rtol=rtol,
-            atol=atol,
+            rtol=opts.rtol,
+            atol=opts.atol,
             events=watched,
-            t_eval=None if times is None else np.append(times[(times > t) & (times < t_end)], t_end),
+            t_eval=None if times is None else np.append(times[(times > t) & (times < opts.t_end)], opts.t_end),
         )
         if sol.status == -1:
             raise IntegrationError(f"the integrator failed at t={sol.t[-1]:.6g}: {sol.message}")
@@ -305,4 +333,4 @@ def _adaptive(
         if sol.status == 0:
             return
         fired = [ev.what for ev, te in zip(watched, sol.t_events, strict=True) if te.size]
-        modes, y = _next_modes(runner, t, y, fired, max_events, events)
+        modes, y = _next_modes(runner, t, y, fired, opts.max_events, events)

@@ -167,6 +167,7 @@ def choose(
     contacts: list[FrictionContact],
     candidates: list[int],
     slipping: dict[int, np.ndarray],
+    *,
     x0: np.ndarray,
     target_n: np.ndarray,
     target_t: list[np.ndarray],

@@ -12,8 +12,8 @@ holds the event is the smooth phase's own.
 
 :class:`PhaseGraph` holds ``step(y, d, h) -> (y⁺, out⁺, jump)`` — one classical RK4 step; at its end the normal
 forces, friction forces, energy and events' values (``out``); and ``jump = max |h (k₄ − k₁)| / (1 + |y|)``, how much
-the rate changes within the step relative to the state (a step too long for the phase shows there) — and ``chunk``, :data:`CHUNK` such steps in one call
-(``mapaccum``: no Python between the steps).
+the rate changes within the step relative to the state (a step too long for the phase shows there) — and
+``chunk``, :data:`CHUNK` such steps in one call (``mapaccum``: no Python between the steps).
 """
 
 from __future__ import annotations
@@ -96,6 +96,25 @@ def kept_rows(M: np.ndarray) -> tuple[int, ...]:
     return tuple(sorted(int(p) for p in perm[:rank]))
 
 
+def _rk4(rate: ca.Function, d: ca.SX, nq: int, nv: int, normalize: Any) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+    """One classical RK4 step of ``ẏ = rate(q, v, d)`` from the symbol ``y`` by the symbol ``h``: ``(y, h, y⁺, jump)``
+    with ``q`` renormalized (unit quaternions) and ``jump`` how much the rate changes across the step, relative to
+    the state's size (a guard, not an error estimate)."""
+    y, h = ca.SX.sym("y", nq + nv), ca.SX.sym("h")
+
+    def f(z: ca.SX) -> ca.SX:
+        return rate(z[:nq], z[nq:], d)
+
+    k1 = f(y)
+    k2 = f(y + 0.5 * h * k1)
+    k3 = f(y + 0.5 * h * k2)
+    k4 = f(y + h * k3)
+    y1 = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    if normalize is not None:
+        y1 = ca.vertcat(normalize(y1[:nq]), y1[nq:])
+    return y, h, y1, ca.mmax(ca.fabs(h * (k4 - k1)) / (1.0 + ca.fabs(y)))
+
+
 class PhaseGraph:
     """The compiled step and chunk of one phase (module docstring): the modes ``kinds``, the kept rows ``kept``.
 
@@ -147,21 +166,8 @@ class PhaseGraph:
         self.n_contacts, self.n_friction = kin.c, nd
         rate = ca.Function("rate", [q, v, d], [ca.vertcat(S["qdot"], qdd)])
         report = ca.Function("report", [q, v, d], [out])
+        y, h, y1, jump = _rk4(rate, d, q.numel(), v.numel(), normalize)
         nq = q.numel()
-        y, h = ca.SX.sym("y", nq + v.numel()), ca.SX.sym("h")
-
-        def f(z: ca.SX) -> ca.SX:
-            return rate(z[:nq], z[nq:], d)
-
-        k1 = f(y)
-        k2 = f(y + 0.5 * h * k1)
-        k3 = f(y + 0.5 * h * k2)
-        k4 = f(y + h * k3)
-        y1 = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-        if normalize is not None:
-            y1 = ca.vertcat(normalize(y1[:nq]), y1[nq:])
-        # how much the rate changes across the step, relative to the state's size: a guard, not an error estimate
-        jump = ca.mmax(ca.fabs(h * (k4 - k1)) / (1.0 + ca.fabs(y)))
         self.report = report
         self.step = ca.Function("step", [y, d, h], [y1, report(y1[:nq], y1[nq:], d), jump], {"cse": True})
         self.chunk = self.step.mapaccum("chunk", CHUNK)

@@ -26,7 +26,7 @@ from ..errors import (
 )
 from ..step import checked, data, servo_reach
 from ..step import impact as impact_step
-from ..step.data import NO_STAB, StepData, StepProblem
+from ..step.data import NO_STAB, StepProblem
 from ..step.general import GaussSolution, general_step, manifold
 from ..step.kernel import Kernel
 from ..step.qp import QPBackend
@@ -310,8 +310,10 @@ class Model:
         """The step's ``A, f = F − h, r₀, J, φ, D, Φ`` as numbers (no checks on their values)."""
         return checked.step_problem(self, *self.checked_state(t, q, v, lam))
 
-    def evaluate_data(self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, stab: Any = NO_STAB) -> StepData:
-        """Everything the step reads at a state, as one :class:`~gausspp.step.data.StepData` (inputs unchecked)."""
+    def evaluate_data(
+        self, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, stab: Any = NO_STAB
+    ) -> StepProblem:
+        """Everything the step reads at a state, as one :class:`~gausspp.step.data.StepProblem` (inputs unchecked)."""
         return data.evaluate(self, t, q, v, lam, stab)
 
     def nearest_on_manifold(

@@ -346,7 +346,10 @@ class Mixed(Realization):
         return f"Mixed(law={self.law!r})"
 
 
-_BY_NAME: dict[str, Callable[[], Realization]] = {"ideal": Ideal, "vakonomic": Vakonomic}
+#: Realizations given by name (``Holonomic(..., realization="vakonomic")``): name → a function making one. One entry
+#: here registers a parameter-free realization of one's own (a subclass of :class:`Realization`);
+#: ``tests/test_extension_points.py`` registers a toy one and simulates and verifies with it.
+REALIZATIONS: dict[str, Callable[[], Realization]] = {"ideal": Ideal, "vakonomic": Vakonomic}
 
 
 def as_realization(value: Realization | str | None) -> Realization:
@@ -356,10 +359,10 @@ def as_realization(value: Realization | str | None) -> Realization:
     if isinstance(value, Realization):
         return value
     if isinstance(value, str):
-        if value in _BY_NAME:
-            return _BY_NAME[value]()
+        if value in REALIZATIONS:
+            return REALIZATIONS[value]()
         raise UnknownNameError(
-            f"realization={value!r} is unknown; by name only {sorted(_BY_NAME)} can be given, "
+            f"realization={value!r} is unknown; by name only {sorted(REALIZATIONS)} can be given, "
             "the others need their data: Force(M=...), Inertial(N=..., lam0=...), Mixed(N=..., M=..., law=...)"
         )
     raise InputError(f"realization must be a Realization or a name, got {type(value).__name__}")

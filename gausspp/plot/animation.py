@@ -80,7 +80,7 @@ def animate(
     Each frame draws the scene's links, body axes, bodies, fixed points and ground, its prescribed path (if
     any), the way traced so far by the points the drawing marks, and, for a run that carries the generalized
     reaction ``R = [T] − F`` (a :class:`~gausspp.Trajectory`; not a
-    :class:`~gausspp.servo.route.ServoTrajectory`), the reaction as an arrow where the drawing says it acts
+    :class:`~gausspp.servo.index_reduction.ServoTrajectory`), the reaction as an arrow where the drawing says it acts
     (one scale for all panels and frames: the longest arrow is a quarter of the picture). The time is in
     each panel's title. The animation plays at ``fps`` frames per second (not in real time).
 

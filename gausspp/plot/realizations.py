@@ -101,9 +101,8 @@ def three_realizations(
     Top row, one panel per realization: the body angular velocity ``ω(t)``. Bottom left: the
     three paths of ``ω`` in the constraint plane ``(ω, l) = 0`` (coordinates on ``e₁ ∥ l × Il``,
     ``e₂ = l × e₁``), with Suslov's attracting steady rotation ``ω∞ ∥ l × Il`` where ``steady`` gives it.
-    Bottom right: the kinetic energy of the carrier
-    ``½ (Iω, ω)``, conserved by the ideal constraint (its reaction does no work on motions that
-    keep it) and changed by the servo torque and by the flywheel.
+    Bottom right: the kinetic energy of the carrier ``½ (Iω, ω)``, conserved by the ideal constraint (its
+    reaction does no work on motions that keep it) and changed by the servo torque and by the flywheel.
 
     Parameters
     ----------

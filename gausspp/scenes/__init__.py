@@ -13,11 +13,16 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import InputError, UnknownNameError
+from .categories import CATEGORIES, category
+from .categories import category as category_of_name
 from .scene import Scene, check_parameters
 from .scene import parameters as _parameters
 
-#: scene name → module in this package
-_MODULES: dict[str, str] = {
+#: The registry, the one place a scene is added: scene name → the module of this package that builds it (its
+#: ``build`` or ``build_<name>``), or a builder function ``(**params) -> Scene`` registered from anywhere
+#: (``tests/test_extension_points.py`` registers a toy one). Every listing, ``gausspp run NAME`` and
+#: ``gausspp scenes NAME`` then find it.
+SCENES: dict[str, str | Callable[..., Scene]] = {
     "two-masses": "two_masses",
     "rigid-body-servo": "rigid_body_servo",
     "gyrostat": "gyrostat",
@@ -44,59 +49,33 @@ _MODULES: dict[str, str] = {
     "underactuated-arm": "underactuated_arm",
 }
 
-#: Scenes whose step is not a square equality system (contacts, bounded or extra actuators, redundant
-#: rows): only the general Gauss QP steps them, so studies that compare the direct formula skip them.
-#: The parallelogram's rows are redundant at every state with ``third_bar`` and at its collinear positions without;
-#: the spatial parallelogram's (revolute joints) at every state.
-GENERAL = (
-    "block-on-floor",
-    "bouncing-pendulum",
-    "saturated-crane",
-    "two-actuator-servo",
-    "four-bar-redundant",
-    "parallelogram",
-    "spatial-parallelogram",
-)
-
-#: Servo scenes realized tangentially: the one-step matrix ``J A⁻¹ Mᵀ`` is singular at every state
-#: (the actuators reach the constraint only in a higher derivative, index > 3), so no one-step route steps them:
-#: studies and tests that step or simulate every scene skip them; the servo route solves them.
-SERVO = ("overhead-crane", "spring-chain-servo")
-
-#: Robots read from URDF: built only with the robots extra (``pip install 'gausspp[robots]'``, a
-#: project error without), each stepped by the solver in its ``params["solver"]``; studies and tests that step
-#: every scene skip them, their own tests run them.
-ROBOT = ("ur5-tool-path", "underactuated-arm")
-
-__all__ = ["GENERAL", "ROBOT", "SERVO", "Scene", "describe", "get", "names", "parameters"]
+__all__ = ["SCENES", "Scene", "category", "describe", "get", "names", "parameters"]
 
 
-def names(kind: str = "all") -> list[str]:
-    """Names of the scenes: ``"all"``, ``"equality"`` (the direct formula applies), ``"general"`` (the general
-    Gauss QP only), ``"servo"`` (index > 3: neither one-step route applies) or ``"robot"`` (URDF robots: the
-    robots extra)."""
-    if kind == "all":
-        return list(_MODULES)
-    if kind == "equality":
-        return [n for n in _MODULES if n not in GENERAL and n not in SERVO and n not in ROBOT]
-    if kind == "general":
-        return [n for n in _MODULES if n in GENERAL]
-    if kind == "servo":
-        return [n for n in _MODULES if n in SERVO]
-    if kind == "robot":
-        return [n for n in _MODULES if n in ROBOT]
-    raise UnknownNameError(f"scene kind {kind!r} is unknown; use 'all', 'equality', 'general', 'servo' or 'robot'")
+def names(category: str = "all") -> list[str]:
+    """Names of the scenes: ``"all"``, or those of one category (:mod:`.categories`, computed from the scenes):
+    ``"equality"`` (the direct formula applies), ``"general"`` (the general Gauss QP only), ``"servo"`` (index
+    > 3: neither one-step solution applies), ``"robot"`` (URDF robots: the robots extra) or ``"unavailable"`` (not
+    buildable here: a missing extra)."""
+    if category == "all":
+        return list(SCENES)
+    if category not in CATEGORIES:
+        raise UnknownNameError(f"scene category {category!r} is unknown; use 'all' or one of {list(CATEGORIES)}")
+    return [n for n in SCENES if category_of_name(n) == category]
 
 
 def _builder(name: str) -> Callable[..., Scene]:
-    module = importlib.import_module(f"{__name__}.{_MODULES[name]}")
+    where = SCENES[name]
+    if callable(where):
+        return where
+    module = importlib.import_module(f"{__name__}.{where}")
     builder: Callable[..., Scene] = getattr(module, "build_" + name.replace("-", "_"), None) or module.build
     return builder
 
 
 def parameters(name: str) -> dict[str, inspect.Parameter]:
     """The parameters of scene ``name``'s builder (name, default, annotation)."""
-    if name not in _MODULES:
+    if name not in SCENES:
         raise UnknownNameError(f"scene {name!r} is unknown; available: {names()}")
     return _parameters(_builder(name))
 
@@ -109,7 +88,7 @@ def get(name: str, **params: Any) -> Scene:
     ``n=2.5``) an :class:`~gausspp.InputError`, NaN or inf a :class:`~gausspp.NonFiniteError`. A module
     lists in ``INFINITE_OK`` the parameters that may be infinite (a bound that is absent).
     """
-    if not isinstance(name, str) or name not in _MODULES:
+    if not isinstance(name, str) or name not in SCENES:
         raise UnknownNameError(f"scene {name!r} is unknown; available: {names()}")
     builder = _builder(name)
     infinite_ok = getattr(sys.modules[builder.__module__], "INFINITE_OK", ())
@@ -124,4 +103,4 @@ def get(name: str, **params: Any) -> Scene:
 
 def describe() -> dict[str, str]:
     """One line per scene (the first line of its builder's docstring)."""
-    return {name: (_builder(name).__doc__ or "").strip().splitlines()[0] for name in _MODULES}
+    return {name: (_builder(name).__doc__ or "").strip().splitlines()[0] for name in SCENES}

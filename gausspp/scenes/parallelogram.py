@@ -212,6 +212,7 @@ def build(
             "positions; reference: the one-DOF crank equation"
         ),
         params=dict(cells=cells, third_bar=third_bar, l=l, m=m, g=g, theta0=theta0, omega0=omega0, t_end=t_end),
+        singular_positions=True,
     )
 
 

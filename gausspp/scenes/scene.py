@@ -51,6 +51,10 @@ class Scene:
     velocities : tuple of str or None
         The name and unit of each velocity ``v_i``, given only where ``v`` is not ``q̇`` (a rigid body's
         quaternion and ``ω``); otherwise :attr:`velocity_names` derives them from :attr:`coordinates`.
+    singular_positions : bool
+        The motion passes positions where the constraint rows become dependent (a parallelogram's collinear
+        bars): a fact of the motion, not of the initial state, so the scene says it; only the general Gauss
+        step runs it through them (:func:`gausspp.scenes.category`).
     """
 
     name: str
@@ -66,6 +70,7 @@ class Scene:
     drawing: Callable[[np.ndarray], dict[str, Any]] | None = None
     coordinates: tuple[str, ...] | None = None
     velocities: tuple[str, ...] | None = None
+    singular_positions: bool = False
 
     @property
     def velocity_names(self) -> tuple[str, ...] | None:

@@ -1,8 +1,8 @@
 """Smooth rest-to-rest profiles for prescribed paths (the servo scenes :mod:`.overhead_crane` and
 :mod:`.spring_chain_servo`), as numpy polynomials in ``t`` and as expressions casadi can differentiate.
 
-A servo-constraint of relative degree ``r`` needs its prescribed path ``r`` times differentiable (the servo
-route differentiates it symbolically), and a path that starts and ends at rest with all those derivatives
+A servo-constraint of relative degree ``r`` needs its prescribed path ``r`` times differentiable (index
+reduction differentiates it symbolically), and a path that starts and ends at rest with all those derivatives
 zero makes the rest states at both ends consistent. The Hermite smoothstep of order ``p`` is the polynomial
 of degree ``2p + 1`` with
 

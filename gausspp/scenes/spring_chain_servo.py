@@ -38,7 +38,7 @@ from ..model.realizations import Force
 from . import smooth_paths
 from .scene import Scene, numbered
 
-#: Largest chain (the servo route differentiates ``yd`` ``2n`` times).
+#: Largest chain (index reduction differentiates ``yd`` ``2n`` times).
 MAX_MASSES = 6
 
 

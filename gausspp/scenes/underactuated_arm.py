@@ -4,7 +4,7 @@ Three revolute joints about ``z`` (shoulder, elbow, wrist; links 0.5, 0.5 and 0.
 horizontal plane, written here as a URDF (:func:`three_link_urdf`) and read by :func:`~gausspp.from_urdf`.
 The tip's ``x`` and ``y`` follow ``p₀ + (1 − cos 2t) d`` (two coordinates), realized by a Béghin servo
 :class:`~gausspp.Force` with two motors, the shoulder and the wrist (``M`` the rows ``e₁``, ``e₃``); the elbow
-is passive. ``J A⁻¹ Mᵀ`` is 2 × 2: the direct route (``solver="direct"``). On ``[0, 0.5]`` s the realizability
+is passive. ``J A⁻¹ Mᵀ`` is 2 × 2: the direct formula (``solver="direct"``). On ``[0, 0.5]`` s the realizability
 margin stays near 0.4; continued, the passive elbow is dragged towards a configuration where ``J A⁻¹ Mᵀ`` is
 singular (t ≈ 0.87 s). Needs ``pip install 'gausspp[robots]'``.
 """
@@ -61,7 +61,7 @@ def arm_model(mech: Any, d: Any = (0.05, 0.04), q0: Any = Q0) -> Model:
 
 
 def build(d: Any = (0.05, 0.04), t_end: float = 0.5) -> Scene:
-    """Three-link planar arm, passive elbow: the tip's x, y follow a path by shoulder and wrist (direct route).
+    """Three-link planar arm, passive elbow: the tip's x, y follow a path by shoulder and wrist (direct formula).
 
     Needs ``pip install 'gausspp[robots]'``.
 
@@ -89,6 +89,6 @@ def build(d: Any = (0.05, 0.04), t_end: float = 0.5) -> Scene:
         lam0=None,
         t_end=float(t_end),
         exact=None,
-        description="three-link arm, passive elbow: tip path by 2 motors (direct route)",
+        description="three-link arm, passive elbow: tip path by 2 motors (direct formula)",
         params={"d": tuple(offset), "t_end": float(t_end), "solver": "direct"},
     )

@@ -7,7 +7,7 @@ The tool frame's position ``p(q)`` follows
 
 three coordinates, realized by a Béghin servo force :class:`~gausspp.Force` whose directions are the six joint
 torques (``M = I₆``). Six actuators for three path coordinates: the arm is redundant, and Gauss's principle picks,
-among the torques that keep the tool on its path, the motion of least compulsion — the QP route
+among the torques that keep the tool on its path, the motion of least compulsion — the QP solver
 (``solver="qp"``, recorded in the scene's ``params`` with the drift control, ``stabilize="baumgarte"``).
 Nothing holds the three-dimensional self-motion (the wrists
 swing freely), which is why the move is kept short. The torques along the motion are Pinocchio's inverse dynamics

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from ..model.model import Model
-from ..step.servo_reach import find_reach, kind
+from ..step.servo_reach import find_reach, geometry
 
 
 @dataclass(frozen=True)
@@ -22,8 +22,8 @@ class ServoDiagnosis:
         the one-step formula applies).
     degrees, chains : tuple of int
         The degrees after the dynamic extension, and the integrators it put in front of each actuator.
-    kind : {"orthogonal", "oblique", "tangential", "mixed"}
-        Blajer's kind of the realization, from ``S = J A⁻¹ D``.
+    geometry : {"orthogonal", "oblique", "tangential", "mixed"}
+        Blajer's geometry of the realization, from ``S = J A⁻¹ D``.
     index : int
         The servo DAE's differentiation index, ``max rᵢ + 1`` (3 for a realizable one-step servo).
     """
@@ -32,7 +32,7 @@ class ServoDiagnosis:
     unextended: tuple[int, ...]
     degrees: tuple[int, ...]
     chains: tuple[int, ...]
-    kind: str
+    geometry: str
     index: int
 
     @property
@@ -48,8 +48,8 @@ class ServoDiagnosis:
             if any(self.chains)
             else ""
         )
-        article = "an" if self.kind[0] in "aeiou" else "a"
-        return f"{article} {self.kind} realization: relative degrees {reach}{extension}; DAE index {self.index}"
+        article = "an" if self.geometry[0] in "aeiou" else "a"
+        return f"{article} {self.geometry} realization: relative degrees {reach}{extension}; DAE index {self.index}"
 
 
 def servo_diagnosis(model: Model, t: float, q: Any, v: Any) -> ServoDiagnosis:
@@ -62,6 +62,6 @@ def servo_diagnosis(model: Model, t: float, q: Any, v: Any) -> ServoDiagnosis:
         unextended=reach.unextended,
         degrees=reach.degrees,
         chains=reach.extended.chains,
-        kind=kind(model, d.A, d.J, d.D),
+        geometry=geometry(model, d.A, d.J, d.D),
         index=reach.index,
     )

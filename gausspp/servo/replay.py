@@ -1,4 +1,4 @@
-"""The open-loop replay: the free mechanism under the forces a servo route returned, and nothing else."""
+"""The open-loop replay: the free mechanism under the forces index reduction returned, and nothing else."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from ..model.model import Model, model_argument
 from ..step.bound import Bound
 from ..step.servo_reach import outputs
 from ..validation import positive, short
-from .route import ServoTrajectory
+from .index_reduction import ServoTrajectory
 
 
 @dataclass(frozen=True)

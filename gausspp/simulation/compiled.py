@@ -1,6 +1,6 @@
 """The compiled lane: the whole right-hand side as one casadi graph.
 
-``rk4-compiled`` chains RK4 steps with ``mapaccum``: the whole run is one C call. ``cvodes``
+``rk4`` in the compiled lane chains RK4 steps with ``mapaccum``: the whole run is one C call. ``cvodes``
 hands the (direct-path) right-hand side to SUNDIALS CVODES through ``casadi.integrator``.
 Both return the states on their grid; recording is the caller's job.
 """
@@ -26,6 +26,7 @@ from ..workspace import workspace
 from . import lanes
 from . import methods as _methods
 from .drift import Stabilization, projection_function
+from .inputs import Options
 from .rhs import RightHandSide
 from .samples import Samples
 
@@ -127,25 +128,23 @@ def _normalize(model: Model, q: ca.MX) -> ca.MX:
 
 
 def integrate_compiled(
-    meth: _methods.Method,
-    model: Model,
-    solver: str,
-    backend: str | None,
-    stab: Stabilization,
-    t0: float,
-    t_end: float,
-    dt: float | None,
-    y0: np.ndarray,
-    rtol: float,
-    atol: float,
-    record: Any,
+    model: Model, opts: Options, *, stab: Stabilization, y0: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int, np.ndarray | None]:
-    """Run a compiled-lane method; return ``(t, Y, steps, failure, rhs evaluations, QP solutions)`` on the recorded
-    grid. The QP solutions (one row per kept sample, NaN where no step starts) are those of each step's first stage,
-    the step at the sample itself — given only for a QP step without Baumgarte terms (``None`` otherwise)."""
+    """Run a compiled-lane method (the checked options ``opts``: method, solver, backend, times, tolerances and
+    record) from ``y0``; return ``(t, Y, steps, failure, rhs evaluations, QP solutions)`` on the recorded grid. The QP
+    solutions (one row per kept sample, NaN where no step starts) are those of each step's first stage, the step at
+    the sample itself — given only for a QP step without Baumgarte terms (``None`` otherwise)."""
+    meth, solver, backend, t0, t_end, dt, record = (
+        opts.method,
+        opts.solver,
+        opts.backend,
+        opts.t0,
+        opts.t_end,
+        opts.dt,
+        opts.record,
+    )
     if meth.name in CVODES:
-        F = rhs_function(model, solver, backend)
-        return cvodes_run(meth.name, F, stab, t0, t_end, dt, y0, rtol, atol, record)
+        return cvodes_run(rhs_function(model, solver, backend), opts, stab=stab, y0=y0)
     assert meth.tableau is not None and dt is not None
     n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
     times = t0 + dt * np.arange(n_steps + 1)
@@ -186,7 +185,7 @@ def _compiled_run(
 ) -> tuple[ca.Function, ca.Function]:
     """The step and the whole-run ``mapaccum`` function, built once per model and setting and kept in the model's
     workspace."""
-    key = (solver, backend, meth.tableau, stab.project)  # the tableau, not the name: rk4 and rk4-compiled share it
+    key = (solver, backend, meth.tableau, stab.project)  # the tableau, not the name
 
     def build_step() -> ca.Function:
         assert meth.tableau is not None
@@ -251,17 +250,18 @@ CVODES = {"cvodes": "bdf", "cvodes-adams": "adams"}
 
 
 def cvodes_run(
-    method: str,
-    F: ca.Function,
-    stab: Stabilization,
-    t0: float,
-    t_end: float,
-    dt: float | None,
-    y0: np.ndarray,
-    rtol: float,
-    atol: float,
-    record: Any,
+    F: ca.Function, opts: Options, *, stab: Stabilization, y0: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, int, Exception | None, int, None]:
+    """CVODES (BDF or Adams) on ``F(t, y, stab)`` from ``y0``, as :func:`integrate_compiled` (no QP solutions)."""
+    method, t0, t_end, dt, rtol, atol, record = (
+        opts.method.name,
+        opts.t0,
+        opts.t_end,
+        opts.dt,
+        opts.rtol,
+        opts.atol,
+        opts.record,
+    )
     if np.isscalar(record):
         grid = np.arange(t0, t_end, dt) if dt else np.linspace(t0, t_end, 201)
         grid = np.append(grid[grid < t_end], t_end)
@@ -269,7 +269,7 @@ def cvodes_run(
         grid = np.unique(np.concatenate([[t0], np.asarray(record, float)]))
     y, t, s = ca.MX.sym("y", y0.size), ca.MX.sym("t"), ca.MX.sym("stab", 2)
     dae = {"x": y, "t": t, "p": s, "ode": F(t, y, s)}
-    opts: dict[str, Any] = {
+    settings: dict[str, Any] = {
         "abstol": atol,
         "reltol": rtol,
         "max_num_steps": MAX_CVODES_STEPS,
@@ -277,12 +277,12 @@ def cvodes_run(
         "show_eval_warnings": False,  # a NaN from a general step's flag stops CVODES: said by the failure, not logged
     }
     if CVODES[method] == "adams":
-        opts.update(linear_multistep_method="adams", nonlinear_solver_iteration="functional")
+        settings.update(linear_multistep_method="adams", nonlinear_solver_iteration="functional")
     if dt:  # as for scipy's methods: dt is the first and the largest step
-        opts.update(step0=dt, max_step_size=dt)
+        settings.update(step0=dt, max_step_size=dt)
 
     def run(upto: int) -> tuple[np.ndarray, ca.Function]:
-        integrator = ca.integrator("cvodes", "cvodes", dae, t0, grid[1 : upto + 1], opts)
+        integrator = ca.integrator("cvodes", "cvodes", dae, t0, grid[1 : upto + 1], settings)
         with stdout_silenced():  # SUNDIALS prints its own failure report
             return np.array(integrator(x0=y0, p=np.array(stab.stab))["xf"]).T, integrator
 
@@ -313,8 +313,5 @@ def cvodes_run(
 
 def run_compiled(job: lanes.Job) -> Samples:
     """The compiled and cvodes lanes' runner: the whole run as one casadi graph (:func:`integrate_compiled`)."""
-    o = job.opts
-    t, y, steps, failure, evaluations, solutions = integrate_compiled(
-        o.method, job.model, o.solver, o.backend, job.stab, o.t0, o.t_end, o.dt, job.y0, o.rtol, o.atol, o.record
-    )
-    return Samples(t, y, steps, evaluations, failure, o.method.name, job.rhs.solver, qp_solutions=solutions)
+    t, y, steps, failure, evaluations, solutions = integrate_compiled(job.model, job.opts, stab=job.stab, y0=job.y0)
+    return Samples(t, y, steps, evaluations, failure, job.opts.method.name, job.rhs.solver, qp_solutions=solutions)

@@ -29,32 +29,32 @@ from ..errors import GaussppError, InitialDataError, IntegrationError
 from ..model.model import Model
 from . import compiled_adaptive, lanes, recording
 from .contacts import active_set, gaps, phase_step
-from .drift import Stabilization, as_stabilization
+from .drift import Stabilization
 from .event_watch import PhaseWatch, StepDense
-from .initial import check_on_constraint, initial_state
 from .inputs import Options
 from .rhs import RightHandSide, step_control_atol
 from .samples import Samples
-from .tolerance import within_tolerance
-from .trajectory import Trajectory
 
 
-def run_contacts(model: Model, q0: Any, v0: Any, lam0: Any, stabilize: Any, opts: Options) -> Trajectory:
-    """The event-driven lane from checked options: initial state, the phases, the recording."""
-    stab = as_stabilization(stabilize, opts.dt)
-    lanes.check_kind(opts.method, lanes.kind_of(model), opts.solver, stab.project)
-    q, v, lam = initial_state(model, opts.t0, q0, v0, lam0)
-    check_on_constraint(model, opts.t0, q, v, lam, opts.constraint_tol, hint="correct q0/v0")
-    g, _gdot = gaps(model, opts.t0, q, v)
+def check_gaps(model: Model, t0: float, q: np.ndarray, v: np.ndarray) -> None:
+    """Refuse initial data inside a contact (a gap below ``−contact_tol``) with an :class:`InitialDataError`."""
+    g, _gdot = gaps(model, t0, q, v)
     if np.any(g < -model.contact_tol):
         i = int(np.argmin(g))
         raise InitialDataError(
-            f"initial data penetrate the contact {model.contact_row_names[i]!r} at t={opts.t0:.6g}: g = {g[i]:.3g} "
+            f"initial data penetrate the contact {model.contact_row_names[i]!r} at t={t0:.6g}: g = {g[i]:.3g} "
             "< 0; start with every gap g ≥ 0"
         )
-    samples = EventRun(model, opts, stab, np.concatenate([q, v, lam, [0.0, 0.0]])).samples()
-    traj = recording.finish(recording.record_contacts(model, samples, opts.drift_tol), samples.failure, opts.throw)
-    return within_tolerance(model, traj, opts.constraint_tol)
+
+
+def run_events(job: lanes.Job) -> Samples:
+    """The events lane's runner: the phases from the checked start ``job.y0`` (:class:`EventRun`)."""
+    return EventRun(job.model, job.opts, job.stab, job.y0).samples()
+
+
+def record_events(job: lanes.Job, samples: Samples) -> recording.Recorded:
+    """The events lane's recording: each sample by the model of its phase (:func:`recording.record_contacts`)."""
+    return recording.record_contacts(job.model, samples, job.opts.drift_tol)
 
 
 class EventRun:

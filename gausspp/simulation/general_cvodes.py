@@ -5,7 +5,7 @@ A model of the general kind whose step is an equality pattern — redundant rows
 Adams–Moulton with functional iteration: ``method="cvodes-adams"``) integrates it in C, without a Python call
 per evaluation. The function returns NaN where the pattern's all-clear flag is down, so that CVODES stops
 there; the run then goes on from the last output time reached with scipy's DOP853 at the same tolerances,
-whose right-hand side takes the Python route and decides the pattern again. A pattern with inequalities
+whose right-hand side takes the Python step and decides the pattern again. A pattern with inequalities
 (bounded actuators: a QP node in the graph) runs in CVODES with Adams' functional iteration, which needs no
 Jacobian; BDF, which differentiates the right-hand side, hands it to DOP853 from the start.
 """
@@ -36,7 +36,7 @@ def _rhs_function(
 ) -> ca.Function | None:
     """``F(t, y, stab) → y'`` of the pattern decided at ``(t0, y0)``, NaN where its flag is down; ``None`` when
     there is none, or when the method ``differentiated`` it (BDF's Newton iteration) and it holds a QP node."""
-    rhs.evaluate(t0, y0)  # the Python route decides the pattern at the start (or its compiled call answers)
+    rhs.evaluate(t0, y0)  # the Python step decides the pattern at the start (or its compiled call answers)
     call = general_step.current_call(model, rhs.backend, None, CONSISTENCY_TOL)
     flat = call is not None and call.function.is_a("SXFunction")
     if call is None or (differentiated and not flat):
@@ -67,9 +67,7 @@ def run_general_cvodes(job: Job) -> Samples:
     continuation = replace(o, method=_methods.get(CONTINUATION), dt=None)
     if F is None:
         return run_scipy(replace(job, opts=continuation))
-    t, Y, steps, failure, evaluations, _ = cvodes_run(
-        o.method.name, F, stab, o.t0, o.t_end, o.dt, y0, o.rtol, o.atol, o.record
-    )
+    t, Y, steps, failure, evaluations, _ = cvodes_run(F, o, stab=stab, y0=y0)
     if failure is None:
         return Samples(t, Y, steps, evaluations + rhs.evaluations, None, o.method.name, rhs.solver)
     later = replace(continuation, t0=float(t[-1]), record=_later(o.record, float(t[-1])))

@@ -192,7 +192,7 @@ def check_step_count(
             f"{what} (method {meth.name!r}): this run will take long"
             + (" (on a terminal, its progress and the time left are shown on standard error)" if shown else "")
             + "; enlarge dt or shorten t_end"
-            + (", or use an adaptive or compiled method (DOP853, rk4-compiled)" if shown else ""),
+            + (", or use an adaptive method (DOP853) or rk4 in the compiled lane" if shown else ""),
             LongRunWarning,
             stacklevel=4,
         )

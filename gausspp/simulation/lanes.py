@@ -15,8 +15,8 @@ casadi graph unless something needs Python (bounded actuators or redundant rows,
 casadi, more states than the compiled run may keep). ``simulate(lane=...)`` names a lane instead; the
 trajectory says which lane ran (``Trajectory.lane``).
 
-To add a lane: add a :class:`Lane` row here (its methods, kinds, solvers and abilities) and a runner
-in :mod:`gausspp.simulation.simulate`'s dispatch table.
+To add a lane: add a :class:`Lane` row here (its methods, kinds, solvers and abilities, its runner and, if the
+samples are not recorded as a smooth run's, its recorder).
 """
 
 from __future__ import annotations
@@ -88,14 +88,25 @@ class Lane:
     keeps_every_step: bool = False
     #: ``runner(job) -> Samples``, or its ``"module:function"`` in :mod:`gausspp.simulation`.
     runner: Any = ""
+    #: ``recorder(job, samples) -> Recorded``, the samples made a trajectory (the same forms as ``runner``).
+    recorder: Any = "recording:record_job"
 
     def run(self, job: Job) -> Any:
         """The lane's samples of ``job`` (:class:`~gausspp.simulation.samples.Samples`)."""
-        runner = self.runner
-        if isinstance(runner, str):
-            module, _, name = runner.partition(":")
-            runner = getattr(importlib.import_module(f"{__package__}.{module}"), name)
-        return runner(job)
+        return _function(self.runner)(job)
+
+    def record(self, job: Job, samples: Any) -> Any:
+        """The lane's recording of ``samples`` (:data:`~gausspp.simulation.recording.Recorded`)."""
+        return _function(self.recorder)(job, samples)
+
+
+def _function(where: Any) -> Any:
+    """A function, or the one ``"module:function"`` of :mod:`gausspp.simulation` names (imported on first use: the
+    runners and recorders import this table)."""
+    if isinstance(where, str):
+        module, _, name = where.partition(":")
+        return getattr(importlib.import_module(f"{__package__}.{module}"), name)
+    return where
 
 
 SMOOTH, GENERAL, CONTACTS = "smooth", "general", "contacts"
@@ -131,7 +142,7 @@ LANES: dict[str, Lane] = {
         Lane(
             "compiled",
             "the compiled step (the whole run as one casadi graph)",
-            ("rk4-compiled", "rk4"),
+            ("rk4",),
             (SMOOTH,),
             SOLVERS,
             qp_in_graph=True,
@@ -181,6 +192,8 @@ LANES: dict[str, Lane] = {
             SOLVERS,
             project=False,
             no_project_reason="contact phases are not projected",
+            runner="events:run_events",
+            recorder="events:record_events",
         ),
     )
 }
@@ -304,11 +317,13 @@ def check_kind(method: Method, kind: Kind, solver: str, project: bool, among: tu
     )
 
 
-def accepts(method: Method, solver: str, backend: str | None = None, kind: str = SMOOTH) -> bool:
-    """Whether ``method`` with ``solver`` (and QP ``backend``) can run a model of ``kind`` — for front ends that
-    list the combinations they try (the work-precision study, the command line)."""
+def accepts(
+    method: Method, solver: str, backend: str | None = None, kind: str = SMOOTH, lane: str | None = None
+) -> bool:
+    """Whether ``method`` with ``solver`` (and QP ``backend``; in ``lane`` if named) can run a model of ``kind`` —
+    for front ends that list the combinations they try (the work-precision study, the command line)."""
     try:
-        check_kind(method, KINDS[kind], solver, False, check_solver(method, solver, backend))
+        check_kind(method, KINDS[kind], solver, False, check_solver(method, solver, backend, lane))
     except GaussppError:  # refused, or the backend is unknown or not installed here
         return False
     return True

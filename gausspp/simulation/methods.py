@@ -79,7 +79,6 @@ METHODS: dict[str, Method] = {
         Method("DOP853", 8, True, "scipy Dormand–Prince 8(5,3), adaptive"),
         Method("Radau", 5, True, "scipy Radau IIA, implicit, stiff"),
         Method("BDF", 1, True, "scipy variable-order BDF, stiff; stays at order 1 when the step is imposed"),
-        Method("rk4-compiled", 4, False, "RK4 with the whole run in one casadi mapaccum call", RK4),
         Method(
             "cvodes",
             1,
@@ -97,10 +96,17 @@ METHODS: dict[str, Method] = {
 }
 
 
+#: Names that were methods and are not: what to write instead. ``"rk4-compiled"`` named a lane, not an integrator
+#: (RK4 run as one casadi graph): ``method="rk4"`` runs there wherever it can, and ``lane="compiled"`` insists.
+RETIRED = {"rk4-compiled": "write method='rk4' (it runs compiled wherever it can), with lane='compiled' to insist"}
+
+
 def get(name: str | Method) -> Method:
     """The method for ``name`` (or an instance unchanged); unknown names list the valid ones."""
     if isinstance(name, Method):
         return name
+    if name in RETIRED:
+        raise UnknownNameError(f"method={name!r} is gone: {RETIRED[name]}")
     if name not in METHODS:
         raise UnknownNameError(f"method={name!r} is unknown; valid methods: {list(METHODS)}")
     return METHODS[name]

@@ -16,6 +16,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Callable
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 
@@ -139,6 +140,12 @@ def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples, tol: fl
     kept, failure, notes = audit(model, rhs, samples.t[: cols.kept], y, cols.S[: cols.kept], margin, failure, crossed)
     kept, failure = _within(model, samples.t, y, cols, tol, kept, failure)
     return _trajectory(model, samples, cols, margin, kept), failure, notes
+
+
+def record_job(job: Any, samples: Samples) -> Recorded:
+    """The default recorder of a lane (:attr:`~gausspp.simulation.lanes.Lane.recorder`): a smooth run's samples
+    (:func:`record_smooth`) with the job's step and drift tolerance."""
+    return record_smooth(job.model, job.rhs, samples, job.opts.drift_tol)
 
 
 def record_contacts(model: Model, samples: Samples, tol: float) -> Recorded:

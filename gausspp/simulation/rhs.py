@@ -308,7 +308,7 @@ _NO_STAB = np.zeros(2)
 class GeneralRightHandSide(_StateDerivative):
     """``F(t, y)`` through the general Gauss QP (:meth:`Model.general_step`): bounded actuators and
     redundant constraint rows. Each evaluation is the compiled general step of the pattern decided (one C call,
-    :mod:`gausspp.step.general.compiled`) when its all-clear flag is up, else the Python route, which decides the
+    :mod:`gausspp.step.general.compiled`) when its all-clear flag is up, else the Python step, which decides the
     pattern again."""
 
     kernel = None

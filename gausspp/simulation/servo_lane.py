@@ -4,12 +4,13 @@ A servo-constraint whose actuators do not act on its second derivative (``J A⁻
 payload path, the far mass of a spring chain) cannot be kept step by step — the one-step Gauss QP has no answer —
 but the actuators still reach it through the constraint's higher derivatives (docs/theory.md §7). Where
 :func:`gausspp.step.servo_reach.higher_reach` finds such a reach, :func:`gausspp.simulate` hands the run to the
-index-reduction route (:func:`gausspp.simulate_servo`) and returns its motion as a :class:`~gausspp.Trajectory`
+index reduction (:func:`gausspp.simulate_servo`) and returns its motion as a :class:`~gausspp.Trajectory`
 like any other: ``u`` the actuator forces, ``a = A⁻¹(f + r₀ + D u)``, the reaction ``D u`` and its compulsion, the
 constraint's values, the energy, and the reaction's work ``W_R = ∫ v·D u dt`` by the cumulative Simpson rule over
-the recorded samples (``Trajectory.lane == "servo"``). The route integrates with DOP853 at the run's
-``rtol``/``atol`` (a fixed-step method, ``dt``, a stabilization or another solver are refused: the route has its
-own feedback, :func:`gausspp.servo.route.feedback`). There is no one-step realizability margin: ``margin`` is NaN.
+the recorded samples (``Trajectory.lane == "servo"``). Index reduction integrates with DOP853 at the run's
+``rtol``/``atol`` (a fixed-step method, ``dt``, a stabilization or another solver are refused: index reduction has
+its own feedback, :func:`gausspp.servo.index_reduction.feedback`). There is no one-step realizability margin:
+``margin`` is NaN.
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ from scipy.integrate import cumulative_simpson
 
 from ..errors import GaussppError, InputError, IntegrationError, RealizabilityError, RealizabilityWarning
 from ..model.model import Model
-from ..servo.route import simulate_servo
+from ..servo.index_reduction import simulate_servo
 from ..step.servo_reach import actuators_only, higher_reach
 from .inputs import Options
 from .labels import model_labels
@@ -35,7 +36,7 @@ LANE = "servo"
 
 
 def wanted(model: Model, t0: float, q0: Any, v0: Any) -> bool:
-    """Whether the run is the servo route's: the one-step route refuses the start for want of reach, and the
+    """Whether the run is index reduction's: the one-step solution refuses the start for want of reach, and the
     actuators reach the constraint through higher derivatives (:func:`~gausspp.step.servo_reach.higher_reach`)."""
     if not actuators_only(model):  # the cheap part of higher_reach's conditions: most models stop here
         return False
@@ -47,32 +48,32 @@ def wanted(model: Model, t0: float, q0: Any, v0: Any) -> bool:
     except RealizabilityError:
         return higher_reach(model, t0, q, v) is not None
     except GaussppError:
-        return False  # the one-step route reports it
+        return False  # the one-step solution reports it
     return False
 
 
 def check_options(opts: Options, stabilize: Any, lam0: Any) -> None:
-    """Refuse what the servo route does not do, saying why."""
+    """Refuse what index reduction does not do, saying why."""
     if opts.method.name != "DOP853" or opts.dt is not None:
         raise InputError(
-            f"the servo route integrates adaptively with DOP853 (its own feedback keeps the constraint): method "
+            f"index reduction integrates adaptively with DOP853 (its own feedback keeps the constraint): method "
             f"{opts.method.name!r}{' and dt' if opts.dt is not None else ''} cannot run it; pass neither method "
             "nor dt, or call gp.simulate_servo"
         )
     if stabilize is not None:
-        raise InputError("the servo route has its own feedback on the constraint: pass no stabilize")
+        raise InputError("index reduction has its own feedback on the constraint: pass no stabilize")
     if lam0 is not None:
-        raise InputError("the servo route's actuators carry no λ state: pass no lam0")
+        raise InputError("index reduction's actuators carry no λ state: pass no lam0")
 
 
 def run_servo(model: Model, q0: Any, v0: Any, opts: Options) -> Trajectory:
-    """The servo route's motion as a :class:`~gausspp.Trajectory` (module docstring); raised per ``opts.throw``."""
+    """Index reduction's motion as a :class:`~gausspp.Trajectory` (module docstring); raised per ``opts.throw``."""
     record = None if np.isscalar(opts.record) else np.asarray(opts.record, float)
     servo = simulate_servo(model, q0, v0, opts.t_end, t0=opts.t0, rtol=opts.rtol, atol=opts.atol, record=record)
     traj = _trajectory(model, servo)
     if servo.status == "success":
         return within_tolerance(model, traj, opts.constraint_tol)
-    failure = IntegrationError(f"the servo route stopped: {servo.message}")
+    failure = IntegrationError(f"index reduction stopped: {servo.message}")
     traj = failed(traj, failure)
     if opts.throw:
         failure.trajectory = traj  # type: ignore[attr-defined]
@@ -118,7 +119,7 @@ def _trajectory(model: Model, servo: Any) -> Trajectory:
         status="success",
         message="",
         method="DOP853",
-        solver=f"servo route (index {servo.index})",
+        solver=f"index reduction (index {servo.index})",
         steps=max(n - 1, 0),
         rhs_evaluations=servo.rhs_evaluations,
         contact_force=np.zeros((n, 0)),

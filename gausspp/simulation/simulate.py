@@ -24,7 +24,7 @@ from ..step.outcome import QP_TOLERANCE
 from . import lanes, recording, servo_lane
 from . import methods as _methods
 from .drift import Baumgarte, Stabilization, as_stabilization
-from .events import run_contacts
+from .events import check_gaps
 from .initial import check_on_constraint, initial_state, project_initial, redundant_rows
 from .inputs import DEFAULT_ATOL, DEFAULT_RTOL, Options, check_options
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
@@ -73,10 +73,10 @@ def simulate(
         The integrator. Default: without ``dt``, ``"DOP853"`` (adaptive, to ``rtol`` and ``atol``); with ``dt``,
         ``"rk4"`` (``"DOP853"`` for a model with unilateral contacts, whose events only adaptive methods
         locate). See :func:`gausspp.methods.names`: ``"rk4"``, ``"symplectic-euler"``, ``"RK45"``,
-        ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"rk4-compiled"``, ``"cvodes"``. Where the method runs is
+        ``"DOP853"``, ``"Radau"``, ``"BDF"``, ``"cvodes"``, ``"cvodes-adams"``. Where the method runs is
         gausspp's choice (:mod:`gausspp.simulation.lanes`): ``"rk4"`` runs as one compiled casadi graph
-        (as ``"rk4-compiled"``) unless something needs Python — bounded actuators or redundant rows, a QP
-        backend outside casadi — and from Python then; ``Trajectory.lane`` says which.
+        unless something needs Python — bounded actuators or redundant rows, a QP backend outside casadi — and
+        from Python then; ``Trajectory.lane`` says which, and ``lane`` chooses.
     solver : {"qp", "direct"}
         How each step is solved; ``backend`` picks the QP backend.
     stabilize : None, "baumgarte", "project", Baumgarte, or a list of these
@@ -135,18 +135,17 @@ def simulate(
         lane=lane,
         drift_tol=drift_tol,
     )
-    if model.contacts:
-        return _labelled("events", model.route, lambda: run_contacts(model, q0, v0, lam0, stabilize, opts))
-    if servo_lane.wanted(model, opts.t0, q0, v0):  # reached only through higher derivatives: the servo route
-        servo_lane.check_options(opts, stabilize, lam0)
+    if not model.contacts and servo_lane.wanted(model, opts.t0, q0, v0):  # reached only through higher
+        servo_lane.check_options(opts, stabilize, lam0)  # derivatives: index reduction
         return servo_lane.run_servo(model, q0, v0, opts)
     stab = as_stabilization(stabilize, opts.dt)
     try:
         y0, redundant, chosen = _start(model, q0, v0, lam0, stab, opts)
-    except RealizabilityError as exc:  # a servo reached only through higher derivatives: point to its route
+    except RealizabilityError as exc:  # a servo reached only through higher derivatives: point to index reduction
         raise servo_reach.explain(model, exc, opts.t0, q0, v0) from None
-    rhs = _right_hand_side(model, opts, stab, redundant)
-    samples = _run(chosen, lanes.Job(rhs, model, stab, opts, y0, redundant))
+    rhs = None if model.contacts else _right_hand_side(model, opts, stab, redundant)  # the events lane: per phase
+    job = lanes.Job(rhs, model, stab, opts, y0, redundant)
+    samples = _run(chosen, job)
     return _servo_advice(
         model,
         opts.t0,
@@ -156,9 +155,7 @@ def simulate(
             model.route,
             lambda: within_tolerance(
                 model,
-                recording.finish(
-                    recording.record_smooth(model, rhs, samples, opts.drift_tol), samples.failure, opts.throw
-                ),
+                recording.finish(chosen.record(job, samples), samples.failure, opts.throw),
                 opts.constraint_tol,
             ),
         ),
@@ -202,6 +199,11 @@ def _start(
     """The initial state ``y0`` (projected if asked, checked on the constraint), whether the rows are redundant
     there, and the lane that runs the model."""
     q, v, lam = initial_state(model, opts.t0, q0, v0, lam0)
+    if model.contacts:  # the phases decide their rows; a contact's gap must not be negative
+        lane = lanes.check_kind(opts.method, lanes.kind_of(model), opts.solver, stab.project, opts.lanes)
+        check_on_constraint(model, opts.t0, q, v, lam, opts.constraint_tol, hint="correct q0/v0")
+        check_gaps(model, opts.t0, q, v)
+        return np.concatenate([q, v, lam, [0.0, 0.0]]), False, lane
     redundant = redundant_rows(model, opts.solver, opts.backend, opts.t0, q, v, lam)
     if stab.project:
         q, v = project_initial(model, opts.t0, q, v, lam, opts.constraint_tol, redundant)
@@ -223,8 +225,9 @@ def _run(lane: lanes.Lane, job: lanes.Job) -> Samples:
     try:
         return lane.run(job)
     except GaussppError as exc:  # failed before the first step could be kept
-        o = job.opts
-        return Samples(np.array([o.t0]), job.y0[None, :], 0, job.rhs.evaluations, exc, o.method.name, job.rhs.solver)
+        o, rhs = job.opts, job.rhs
+        evaluations, solver = (0, o.solver) if rhs is None else (rhs.evaluations, rhs.solver)
+        return Samples(np.array([o.t0]), job.y0[None, :], 0, evaluations, exc, o.method.name, solver)
 
 
 __all__ = ["QP_TOLERANCE", "simulate"]

@@ -55,7 +55,7 @@ class Trajectory:
     lane : str
         The lane that ran the method (:mod:`gausspp.simulation.lanes`): ``"compiled"`` (the whole run as
         one casadi graph), ``"python"`` (fixed steps from Python), ``"scipy"``, ``"cvodes"``, ``"events"``
-        (contact phases) or ``"servo"`` (the index-reduction route of a servo-constraint,
+        (contact phases) or ``"servo"`` (index reduction of a servo-constraint,
         :mod:`gausspp.simulation.servo_lane`); ``""`` for a trajectory not made by :func:`gausspp.simulate`.
     route : str
         How each step eliminated the acceleration: ``"dense"`` or ``"sparse"`` (the model's ``route``,

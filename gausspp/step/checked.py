@@ -69,8 +69,8 @@ def kernel_for(model: StepModel, solver: str, backend: str | qp.QPBackend | None
 
 def checked_call(model: StepModel, solver: str, backend: object, refine: bool) -> CheckedCall | None:
     """The hot path of ``model.step`` for ``solver`` (:mod:`gausspp.step.checked_call`), built on first use and
-    kept; ``None`` where only the full route applies (contacts, bounds, a QP solved from Python, an unknown
-    solver or a backend given as an object — the full route then also reports any error)."""
+    kept; ``None`` where only the full step applies (contacts, bounds, a QP solved from Python, an unknown
+    solver or a backend given as an object — the full step then also reports any error)."""
     if model.contacts or model.bounded or solver not in SOLVERS or not (backend is None or type(backend) is str):
         return None
     if solver == "direct" and backend is not None:
@@ -97,7 +97,7 @@ def _prefer_general(model: StepModel, backend: object) -> None:
 
 def general_hot(model: StepModel, t: Any, q: Any, v: Any, lam: Any, solver: str, backend: object) -> StepResult | None:
     """``model.step``'s hot path through the compiled general step (:mod:`gausspp.step.general.compiled`) of the
-    pattern last decided, or ``None`` when the full route must answer (inputs not plain float arrays of the right
+    pattern last decided, or ``None`` when the full step must answer (inputs not plain float arrays of the right
     shapes, no pattern decided yet, or its all-clear flag down)."""
     if solver != "qp" or not (backend is None or type(backend) is str):
         return None

@@ -14,10 +14,10 @@ makes would pass:
 * for a QP, its relative primal and dual residuals ``≤`` :data:`~gausspp.step.outcome.QP_TOLERANCE`.
 
 Any other case — a list instead of an array, a wrong shape, a flag of 0 — returns ``None``, and
-:meth:`~gausspp.Model.step` takes the full route (:func:`gausspp.step.checked.checked_step`), which
+:meth:`~gausspp.Model.step` takes the full step (:func:`gausspp.step.checked.checked_step`), which
 diagnoses, raises the project error or warns, and falls back to the general QP where it should. The
 hot path thus costs a few numpy assignments, one C call and one small copy, and answers exactly what
-the full route answers.
+the full step answers.
 """
 
 from __future__ import annotations
@@ -101,7 +101,7 @@ class CheckedCall:
     solver : str
         The solver's name in results (``"direct"`` or the QP backend's).
     margin_warn : float
-        Below this margin the full route answers (it warns, or hands redundant rows to the general QP).
+        Below this margin the full step answers (it warns, or hands redundant rows to the general QP).
     """
 
     def __init__(
@@ -127,7 +127,7 @@ class CheckedCall:
         self._shapes = (self._q.shape, self._v.shape, self._lam.shape)
 
     def __call__(self, t: Any, q: Any, v: Any, lam: Any) -> StepResult | None:
-        """The step at ``(t, q, v, λ)``, or ``None`` when the full route must answer (module docstring)."""
+        """The step at ``(t, q, v, λ)``, or ``None`` when the full step must answer (module docstring)."""
         if not (type(q) is np.ndarray and type(v) is np.ndarray) or (q.shape, v.shape) != self._shapes[:2]:
             return None
         if q.dtype.kind != "f" or v.dtype.kind != "f":

@@ -1,17 +1,18 @@
-"""A step's data as numbers at one instant: :class:`StepProblem` and :class:`StepData`.
+"""A step's data as numbers at one instant: :class:`StepProblem`, the one type between the model's expressions
+(:class:`~gausspp.step.expressions.StepExpressions`) and the step's answer (:class:`~gausspp.step.results.StepResult`).
 
-:class:`StepProblem` is ``A, f, r₀, J, φ, D, Φ`` of docs/theory.md §2: what :meth:`Model.step_data`
-returns, what :func:`gausspp.step.solve_numbers.solve` takes, and what the diagnosis of a failed step
-(:mod:`gausspp.step.outcome`) reads. :class:`StepData` is everything the general step, the projection
-onto the constraints and the impact law read at a state ``(t, q, v, λ)`` with Baumgarte terms
-``stab = (α, β)``: the step, the constraint values ``Φ`` and ``g``, the kinematics ``q̇``, the energy and
-the power of the non-conservative forces, and the unilateral contacts' ``g_c, J_c, φ_c, ġ_c``; one
-compiled function, kept in the model's workspace, evaluates it (:func:`evaluate`).
+Its first fields are ``A, f, r₀, J, φ, D, Φ`` of docs/theory.md §2: what :meth:`Model.step_data` returns, what
+:func:`gausspp.step.solve_numbers.solve` takes, and what the diagnosis of a failed step
+(:mod:`gausspp.step.outcome`) reads; :meth:`StepProblem.create` builds them from numbers given by hand. Evaluated
+at a model's state ``(t, q, v, λ)`` with Baumgarte terms ``stab = (α, β)`` (:func:`evaluate`, one compiled function
+kept in the model's workspace) it also carries what the general step, the projection onto the constraints and the
+impact law read: the holonomic residuals ``g``, the kinematics ``q̇``, the energy and the power of the
+non-conservative forces, and the unilateral contacts' ``g_c, J_c, φ_c, ġ_c``.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import casadi as ca
@@ -38,6 +39,15 @@ class StepProblem:
     phi : (k,) array     right-hand side of ``J q̈ = φ``
     D : (n, m) array     reaction directions
     Phi : (k,) array     constraint value at the state
+
+    Evaluated at a model's state (empty, or 0, for a problem given by hand):
+
+    g : (k,) array       holonomic residuals ``g(q, t)`` (0 on other rows)
+    qdot : (nq,) array   ``q̇`` from the kinematics
+    energy, power : float
+        mechanical energy (0 if the mechanism has none) and power of the non-conservative forces
+    gc, Jc, phic, gdotc : (nc,), (nc, n), (nc,), (nc,) arrays
+        the unilateral contacts' gaps, Jacobian, right-hand side and gap rates
     """
 
     A: np.ndarray
@@ -47,6 +57,14 @@ class StepProblem:
     phi: np.ndarray
     D: np.ndarray
     Phi: np.ndarray
+    g: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    qdot: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    energy: float = 0.0
+    power: float = 0.0
+    gc: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    Jc: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    phic: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    gdotc: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @classmethod
     def create(
@@ -99,50 +117,8 @@ def _vector(name: str, value: object, size: int) -> np.ndarray:
     return arr
 
 
-@dataclass(frozen=True)
-class StepData:
-    """The step at one state, as arrays in their natural shapes.
-
-    Attributes
-    ----------
-    A : (nv, nv)
-        Mass matrix.
-    f : (nv,)
-        ``F − h``: applied minus gyroscopic/Coriolis forces.
-    r0 : (nv,)
-        The realizations' known reaction part.
-    J : (k, nv), phi : (k,)
-        The bilateral rows ``J q̈ = φ`` (with the Baumgarte terms of ``stab``).
-    D : (nv, m)
-        The realizations' reaction directions.
-    Phi, g : (k,)
-        The constraints' values ``Φ(q, v, t)`` and holonomic residuals ``g(q, t)`` (0 on other rows).
-    qdot : (nq,)
-        ``q̇`` from the kinematics.
-    energy, power : float
-        Mechanical energy (0 if the mechanism has none) and power of the non-conservative forces.
-    gc, Jc, phic, gdotc : (nc,), (nc, nv), (nc,), (nc,)
-        The unilateral contacts' gaps, Jacobian, right-hand side and gap rates.
-    """
-
-    A: np.ndarray
-    f: np.ndarray
-    r0: np.ndarray
-    J: np.ndarray
-    phi: np.ndarray
-    D: np.ndarray
-    Phi: np.ndarray
-    g: np.ndarray
-    qdot: np.ndarray
-    energy: float
-    power: float
-    gc: np.ndarray
-    Jc: np.ndarray
-    phic: np.ndarray
-    gdotc: np.ndarray
-
-
-_FIELDS = tuple(StepData.__dataclass_fields__)
+#: The fields :func:`evaluate` fills, in the order of its compiled function's outputs.
+_FIELDS = ("A", "f", "r0", "J", "phi", "D", "Phi", "g", "qdot", "energy", "power", "gc", "Jc", "phic", "gdotc")
 _SCALARS = ("energy", "power")
 _MATRICES = ("A", "J", "D", "Jc")
 
@@ -172,8 +148,8 @@ def _build(model: StepModel) -> Bound:
 
 def evaluate(
     model: StepModel, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, stab: Any = NO_STAB
-) -> StepData:
-    """:class:`StepData` at ``(t, q, v, λ)`` (inputs already checked; no checks on the values)."""
+) -> StepProblem:
+    """:class:`StepProblem` at ``(t, q, v, λ)``, every field (inputs already checked; no checks on the values)."""
     bound = workspace(model).get(("step-data",), lambda: _build(model))
     load_inputs(bound.args, (t, q, v, lam, stab))
     bound.eval()
@@ -185,4 +161,4 @@ def evaluate(
             values[name] = raw.reshape(shape, order="F").copy()
         else:
             values[name] = raw.copy()
-    return StepData(**values)
+    return StepProblem(**values)

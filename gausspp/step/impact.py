@@ -42,7 +42,7 @@ def impact(
     phi = d.J @ v - d.Phi
     impulse = np.zeros(len(model.contact_row_names))
     fast = impact_qp.ideal_impact(model, backend, d.A, v, d.J, phi, Jcc, Jcc @ v - d.gdotc[closed] + target)
-    if fast is not None:  # ideal rows: one QP in v⁺, verified (else the general route below)
+    if fast is not None:  # ideal rows: one QP in v⁺, verified (else the general step below)
         v_after, lam_after = fast[0], lam
         impulse[closed] = fast[2]
     else:

@@ -7,10 +7,10 @@ impact problem of :mod:`gausspp.step.impact` is a QP in ``v⁺`` alone (docs/the
 
 whose multipliers are the impulses: ``A (v⁺ − v⁻) = Jᵀ μ + J_cᵀ p`` with ``p ≥ 0``. One call of a casadi conic
 (:class:`~gausspp.step.qp.casadi_conic.CasadiConic`, the general QP's default backend) solves it, where the
-general route (:func:`~gausspp.step.general.solve_general`) scales, tests the rows' rank and stages — about a
+general step (:func:`~gausspp.step.general.solve_general`) scales, tests the rows' rank and stages — about a
 tenth of its time on the box dropped on the floor. The answer is then checked from the problem's data alone
 (feasibility, the impulses' sign, complementarity, stationarity); any doubt — dependent rows the plugin
-could not factor, a backend outside casadi, a check that fails — returns ``None`` and the general route answers.
+could not factor, a backend outside casadi, a check that fails — returns ``None`` and the general step answers.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ def ideal_impact(
     model: StepModel, backend: Any, A: np.ndarray, v: np.ndarray, J: np.ndarray, e: np.ndarray, Jc: np.ndarray,
     target: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:  # fmt: skip
-    """``(v⁺, μ, p)`` of the QP above (``e = J v⁻ − Φ``), verified; ``None`` where the general route must answer."""
+    """``(v⁺, μ, p)`` of the QP above (``e = J v⁻ − Φ``), verified; ``None`` where the general step must answer."""
     if not applies(model):
         return None
     chosen = resolve_backend(backend)

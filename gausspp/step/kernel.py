@@ -5,7 +5,7 @@ on inputs written into ``kernel.inputs`` in place):
 
 * :class:`CompiledKernel` — the direct solve, or a QP posed with a casadi ``conic`` plugin,
   is inside the graph: one call per step;
-* :class:`PythonQPKernel` — the QP is solved from Python (qpsolvers route): one call builds
+* :class:`PythonQPKernel` — the QP is solved from Python (the qpsolvers family): one call builds
   the QP, the backend solves it, a second call finishes the step.
 
 :func:`build_kernel` makes either from a step's expressions, by the dense route (whitened reaction space,

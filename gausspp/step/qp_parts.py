@@ -105,7 +105,7 @@ def qp_parts(
     route: str = "dense",
     dense_data: bool = False,
 ) -> QPParts:
-    """The QP route's :class:`QPParts` for the step ``p`` (expressions of ``inputs``) by ``route``;
+    """The QP solver's :class:`QPParts` for the step ``p`` (expressions of ``inputs``) by ``route``;
     ``dense_data``: the QP's matrices with every entry stored (for a backend reading numpy arrays)."""
     if route == "sparse":
         sred = sparse.sparse_reduce(p)

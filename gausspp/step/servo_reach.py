@@ -1,4 +1,4 @@
-"""How the actuators reach a servo-constraint: relative degrees, dynamic extension, Blajer's kind, the index.
+"""How the actuators reach a servo-constraint: relative degrees, dynamic extension, Blajer's geometry, the index.
 
 The one-step formula needs ``S = J A⁻¹ D`` nonsingular (condition (12)): every actuator acts on the constrained
 quantities' *accelerations*. Many machines are not like that. An overhead crane's trolley force reaches the
@@ -18,8 +18,8 @@ integrator — their force becomes a state, its derivative the new input — and
 (the simplest form of Descusse and Moog's extension algorithm). The crane needs two integrators on the
 tension; then ``r = (4, 4)`` and ``B`` is nonsingular.
 
-**Index and kind.** The servo DAE's differentiation index is ``max rᵢ + 1`` after extension (``2n + 1`` for a
-chain of ``n`` masses driven at one end and prescribed at the other). Blajer's kinds (:func:`kind`), from the
+**Index and geometry.** The servo DAE's differentiation index is ``max rᵢ + 1`` after extension (``2n + 1`` for a
+chain of ``n`` masses driven at one end and prescribed at the other). Blajer's geometries (:func:`geometry`), from the
 principal angles between the constraint normals and the reaction directions in the kinetic metric:
 *orthogonal* (all 0: the actuators push along the normals, an ideal constraint), *oblique* (none 90°),
 *tangential* (all 90°: ``J A⁻¹ D = 0``, no actuator acts on the constrained accelerations) and *mixed*
@@ -41,7 +41,7 @@ from .protocol import StepModel
 #: Dependence of a derivative on the inputs below this (relative to its dependence on the state) counts as none.
 REACH_TOL = 1e-9
 
-#: A cosine below this counts as zero when the kind is named.
+#: A cosine below this counts as zero when the geometry is named.
 KIND_TOL = 1e-9
 
 
@@ -65,7 +65,7 @@ def extended_motion(model: StepModel, chains: tuple[int, ...]) -> Extended:
     p = model.expressions
     t, q, v, lam, stab = model.inputs
     if lam.numel() or not model.m:
-        raise InputError("the servo route needs actuator forces and no realization that carries λ as a state")
+        raise InputError("index reduction needs actuator forces and no realization that carries λ as a state")
     xi = [ca.SX.sym(f"xi{a}", c) for a, c in enumerate(chains)]
     w = ca.SX.sym("w", len(chains))
     force = ca.vertcat(*[xi[a][0] if c else w[a] for a, c in enumerate(chains)])
@@ -186,7 +186,7 @@ def find_reach(model: StepModel, t0: float, q0: np.ndarray, v0: np.ndarray, max_
     )
 
 
-def kind(model: StepModel, A: np.ndarray, J: np.ndarray, D: np.ndarray) -> str:
+def geometry(model: StepModel, A: np.ndarray, J: np.ndarray, D: np.ndarray) -> str:
     """Blajer's name for the realization, from the principal angles (in the kinetic metric ``A⁻¹``) between the
     constraint normals ``Jᵀ`` and the reaction directions ``D``: *orthogonal* (the same subspace: every angle
     0, an ideal constraint), *tangential* (perpendicular: every angle 90°, ``J A⁻¹ D = 0``), *mixed* (some at
@@ -214,7 +214,7 @@ def evaluate_J(model: StepModel, t: float, q: np.ndarray, v: np.ndarray) -> np.n
 
 def actuators_only(model: StepModel) -> bool:
     """Rows kept by actuators alone (force realizations, as many as rows, no λ, no contacts or bounds): the only
-    models whose constraint can be out of the one-step route's reach."""
+    models whose constraint can be out of the one-step solution's reach."""
     return bool(
         model.k
         and not model.n_lam
@@ -227,7 +227,7 @@ def actuators_only(model: StepModel) -> bool:
 
 def higher_reach(model: StepModel, t: float, q: Any, v: Any) -> Reach | None:
     """How the actuators reach the constraint when only its higher derivatives feel them (index above 3, or
-    integrators needed in front of an actuator); ``None`` where the one-step route is the one (or nothing
+    integrators needed in front of an actuator); ``None`` where the one-step solution is the one (or nothing
     reaches): only actuators (force realizations, as many as rows, no λ, no contacts or bounds) can be out of
     reach — rows of other realizations that fail are dependent rows or directions."""
     if not actuators_only(model):
@@ -244,8 +244,8 @@ def higher_reach(model: StepModel, t: float, q: Any, v: Any) -> Reach | None:
 
 
 def explain(model: StepModel, exc: RealizabilityError, t: float, q: Any, v: Any) -> RealizabilityError:
-    """The one-step route's refusal ``exc``, reworded when the actuators do reach the constraint through a higher
-    derivative: then the advice is the servo route, not other actuators. Anything else is returned unchanged."""
+    """The one-step solution's refusal ``exc``, reworded when the actuators do reach the constraint through a higher
+    derivative: then the advice is index reduction, not other actuators. Anything else is returned unchanged."""
     reach = higher_reach(model, t, q, v)
     if reach is None:
         return exc

@@ -1,4 +1,4 @@
-"""The demo's content (``gausspp demo``): one step by both routes, every scene by both step solvers,
+"""The demo's content (``gausspp demo``): one step by both solvers, every scene by both step solvers,
 the scenes only the general Gauss QP solves, and the teaching figures.
 
 Each study yields its rows one at a time (the command line prints each as soon as it is computed);
@@ -20,7 +20,7 @@ from ..model.model import Model
 from ..simulation.simulate import simulate
 from ..simulation.trajectory import Trajectory
 from ..step import general as general_step
-from ..step.qp import qpsolvers_route
+from ..step.qp import qpsolvers_backend
 from ..verification.crosscheck import crosscheck
 from ..verification.verify import verify
 from .figures import skate_runs, skate_title, suslov_steady, three_realizations_runs
@@ -58,7 +58,7 @@ GENERAL_PARAMS: dict[str, dict[str, Any]] = {"saturated-crane": {"F_max": 8.0}}
 
 @dataclass(frozen=True)
 class StepRow:
-    """One route's raw step at t = 0 (no refinement), its gap to the direct one and to the reference, its cost."""
+    """One solver's raw step at t = 0 (no refinement), its gap to the direct one and to the reference, its cost."""
 
     scene: str
     label: str
@@ -176,7 +176,9 @@ def scene_row(name: str) -> SceneRow:
     scene = scenes.get(name)
     T = min(scene.t_end, 2.0)
     steps = STEPS.get(name, 2000)
-    kwargs: dict[str, Any] = dict(lam0=scene.lam0, method="rk4-compiled", dt=T / steps, record=max(steps // 400, 1))
+    kwargs: dict[str, Any] = dict(
+        lam0=scene.lam0, method="rk4", lane="compiled", dt=T / steps, record=max(steps // 400, 1)
+    )
     start = time.perf_counter()
     direct = simulate(scene.model, scene.q0, scene.v0, T, solver="direct", **kwargs)
     run_ms = (time.perf_counter() - start) * 1e3
@@ -209,12 +211,12 @@ def backends() -> Backends:
     the default itself. (ProxQP before OSQP: at these rows' tolerances OSQP, iterative, is the slower;
     ``benchmarks/general_qp.py`` prints OSQP's time per QP beside daqp's.)"""
     first = general_step.default_backend()
-    second = "proxqp" if "proxqp" in qpsolvers_route.available() else "osqp"
+    second = "proxqp" if "proxqp" in qpsolvers_backend.available() else "osqp"
     return Backends(first, None if first in ("osqp", second) else second)
 
 
 def _registry_name(backend: str) -> str:
-    """A backend's short name as the registry's full name (a qpsolvers solver unless it names its route)."""
+    """A backend's short name as the registry's full name (a qpsolvers solver unless it names its family)."""
     return backend if ":" in backend or backend == general_step.default_backend() else f"qpsolvers:{backend}"
 
 
@@ -335,7 +337,7 @@ def two_masses_figure() -> Any:
         scene = scenes.get("two-masses", realization=realization, k=3.0, v=0.5)
         params = scene.params
         runs[f"{'rod' if realization == 'ideal' else 'servo'}"] = simulate(
-            scene.model, scene.q0, scene.v0, 4.0, method="rk4-compiled", dt=1e-3, solver="direct", record=10
+            scene.model, scene.q0, scene.v0, 4.0, method="rk4", lane="compiled", dt=1e-3, solver="direct", record=10
         )
     title = (
         f"scene two-masses: m1 = {params['m1']:g} kg, m2 = {params['m2']:g} kg, F = {params['F']:g} N on m2, "

@@ -53,7 +53,7 @@ def _header(text: str) -> Iterator[str]:
 
 
 def step_lines(rows: Iterable[StepRow], default_backend: str) -> Iterator[str]:
-    """The one-step table: each route's raw answer, their gap, the distance from the reference, µs per step."""
+    """The one-step table: each solver's raw answer, their gap, the distance from the reference, µs per step."""
     yield f"gausspp demo — one step at t = 0 by the direct formula and by the Gauss QP ({default_backend})\n"
     rows = list(rows)
     width = max([22, *(len(r.label) for r in rows)])
@@ -75,7 +75,7 @@ def step_lines(rows: Iterable[StepRow], default_backend: str) -> Iterator[str]:
     )
     yield (
         "acceleration (SI): q̈ at t = 0 in the coordinates' units per s² (m/s², rad/s²); multiplier: the reaction's\n"
-        "multiplier λ (N for the rod and the servo force); QP vs direct: largest difference of the two routes' raw\n"
+        "multiplier λ (N for the rod and the servo force); QP vs direct: largest difference of the two solvers' raw\n"
         "answers (no refinement step), blank for the direct row itself; vs reference: distance from the independent\n"
         "acceleration-space QP (gp.crosscheck: built from A, a0, J, phi, D alone, solved by a qpsolvers backend).\n"
         "µs/step: one compiled casadi call per step (Function.buffer), minimum over repeats."

@@ -1,6 +1,6 @@
 """An independent reference for the step: Gauss's principle posed in acceleration space.
 
-The model's two routes (the direct multiplier formula and the compiled QP) share one reduction to
+The model's two solvers (the direct multiplier formula and the compiled QP) share one reduction to
 reaction space (``Ŝ``, the whitened reaction, :mod:`gausspp.step`) and, by default, one refinement
 step; comparing them checks little. The reference here shares nothing with them. It is the QP of
 the paper (§3) and docs/theory.md §3, assembled from the step's data ``A, a₀, J, φ, D`` alone::
@@ -140,9 +140,9 @@ class CrossCheck:
     Attributes
     ----------
     reference : AccelerationQP   the acceleration-space QP's answer and KKT residuals
-    answers : dict               route name → acceleration, raw (each solver's own answer)
-    distances : dict             route name → ``‖a − a_ref‖ / scale``
-    refined : dict               route name → distance of the refined answer (reported apart)
+    answers : dict               solver name → acceleration, raw (each solver's own answer)
+    distances : dict             solver name → ``‖a − a_ref‖ / scale``
+    refined : dict               solver name → distance of the refined answer (reported apart)
     scale : float                ``max(‖a_ref‖, ‖a₀‖, ‖A⁻¹f‖)``, the size the distances are relative to
     tolerance : float
     """
@@ -186,15 +186,15 @@ def crosscheck(
     reference_backend: str | None = None,
     tolerance: float = TOLERANCE,
 ) -> CrossCheck:
-    """Compare the model's step routes at ``(t, q, v, λ)`` with the acceleration-space QP.
+    """Compare the model's step solvers at ``(t, q, v, λ)`` with the acceleration-space QP.
 
-    Each route in ``solvers`` is run raw (``refine=False``) and refined; ``backend`` is the model's
-    QP backend. The direct route is skipped where it does not exist (more reaction directions than
+    Each solver in ``solvers`` is run raw (``refine=False``) and refined; ``backend`` is the model's
+    QP backend. The direct formula is skipped where it does not exist (more reaction directions than
     constraint rows). Models with contacts or bounded actuators are not covered (their step has
     inequalities): an :class:`InputError`.
     """
     model_argument("crosscheck", model)
-    tolerance = positive("tolerance", tolerance, hint=" (the relative agreement asked of the routes, e.g. 1e-9)")
+    tolerance = positive("tolerance", tolerance, hint=" (the relative agreement asked of the solvers, e.g. 1e-9)")
     if model.contacts or model.bounded:
         raise InputError("crosscheck covers the equality step; this model has contacts or bounded actuators")
     # the model's own answers first: they raise the clear project errors (unrealizable, not positive definite)

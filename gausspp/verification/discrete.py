@@ -121,14 +121,14 @@ def solve_qp(d: Discretized) -> tuple[float, np.ndarray, np.ndarray]:
     H = sp.block_diag([w[i] * d.G[i] for i in range(1, N1 - 1)], format="csc")
     g = np.concatenate([w[i] * d.R[i] for i in range(1, N1 - 1)])
     point_blocks, back = pointwise_blocks(d)
-    diff_blocks, row_kind = interval_blocks(d)
+    diff_blocks, row_tags = interval_blocks(d)
     blocks = point_blocks + diff_blocks
     B = sp.vstack(blocks, format="csc") if blocks else sp.csc_matrix((0, m * n))
     x, y = _conic(H, g, B)
     eta = np.zeros((N1, n))
     eta[1:-1] = x.reshape(m, n)
     value = float(g @ x + 0.5 * x @ (H @ x))  # Σ w (Rη + ½ηGη)
-    lam = multipliers(d, y, back, row_kind)
+    lam = multipliers(d, y, back, row_tags)
     return 2.0 * value / (d.t[-1] - d.t[0]), eta, lam
 
 
@@ -163,7 +163,7 @@ def interval_blocks(d: Discretized) -> tuple[list[sp.spmatrix], list[tuple[str, 
     m = N1 - 2
     h = np.diff(d.t)
     blocks: list[sp.spmatrix] = []
-    row_kind: list[tuple[str, int, int]] = []  # ("interval", j, r) per differential constraint row
+    row_tags: list[tuple[str, int, int]] = []  # ("interval", j, r) per differential constraint row
     diff = np.flatnonzero(~d.pointwise)
     if diff.size:
         for j in range(N1 - 1):
@@ -175,12 +175,12 @@ def interval_blocks(d: Discretized) -> tuple[list[sp.spmatrix], list[tuple[str, 
             if j + 1 <= N1 - 2:
                 B[:, j * n : (j + 1) * n] = E1 / h[j] + E0 / 2
             blocks.append(B)
-            row_kind += [("interval", j, int(r)) for r in diff]
-    return blocks, row_kind
+            row_tags += [("interval", j, int(r)) for r in diff]
+    return blocks, row_tags
 
 
 def multipliers(
-    d: Discretized, y: np.ndarray, back: list[tuple[int, np.ndarray]], row_kind: list[tuple[str, int, int]]
+    d: Discretized, y: np.ndarray, back: list[tuple[int, np.ndarray]], row_tags: list[tuple[str, int, int]]
 ) -> np.ndarray:
     """``λ`` at the nodes from the QP's multipliers ``y``: ``λ = −μ/w`` at nodes, ``λ = −ν/h`` at midpoints.
 
@@ -197,7 +197,7 @@ def multipliers(
     for i, P in back:
         lam[i, point] = -(P @ y[at : at + P.shape[1]]) / w[i]
         at += P.shape[1]
-    for (_kind, j, r), yj in zip(row_kind, y[at:], strict=True):
+    for (_tag, j, r), yj in zip(row_tags, y[at:], strict=True):
         mids[j, r] = -yj / h[j]
     if diff.size:  # midpoints → nodes: average inside, extrapolate at the ends
         lam[1:-1, diff] = 0.5 * (mids[:-1, diff] + mids[1:, diff])

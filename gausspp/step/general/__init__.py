@@ -8,7 +8,7 @@ where no closed form exists (docs/theory.md §3, §6, §7). Its modules, followi
   bilateral rows are kept, decided on the constraint manifold (:mod:`.manifold`: the nearest state on it);
 * :mod:`.solve` — the stages (track, compulsion, least norm), each a QP by a backend (:mod:`.stage`);
 * :mod:`.general_step` — the model's general step at a state: the compiled call when its all-clear
-  flag is up, the route above otherwise.
+  flag is up, the Python step above otherwise.
 """
 
 from .solve import (

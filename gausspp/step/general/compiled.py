@@ -16,7 +16,7 @@ rows, when the compulsion stage is infeasible (the actuators saturate), the *tra
 (reaction directions dependent on the kept ones) carry the least-norm share of the reaction: with
 ``W_d = W_k C`` on the manifold, ``u`` is moved along the null directions ``N = [−C; I]`` to the least norm.
 
-The flag is 1 exactly when the Python route (:func:`.solve.solve_general`) would take the same decision
+The flag is 1 exactly when the Python step (:func:`.solve.solve_general`) would take the same decision
 at this state without a reference on the manifold, and the answer passes its checks:
 
 * inputs and outputs finite, ``A`` positive definite (relative pivot ``> 0``);
@@ -31,10 +31,10 @@ at this state without a reference on the manifold, and the answer passes its che
   together: to first order in the drift, what a state on the manifold would show);
 * the kept rows stay realizable: the Cholesky pivots of ``S Sᵀ`` on the kept and tracked rows are at least
   :data:`REALIZABLE_PIVOT` times the squared pivots of the rows' Gram matrix (a nearly unrealizable state goes to
-  the Python route, which decides it);
+  the Python step, which decides it);
 * the QP's answer is feasible (:data:`~.stage.FEASIBILITY_TOL`) and stationary (:data:`~.stage.DUAL_TOL`).
 
-Otherwise the caller takes the Python route, which decides again (:mod:`.general_step`).
+Otherwise the caller takes the Python step, which decides again (:mod:`.general_step`).
 """
 
 from __future__ import annotations
@@ -59,16 +59,16 @@ from .solve import TRACK_REGULARIZATION
 from .stage import DUAL_TOL, FEASIBILITY_TOL
 
 #: The kept rows' Cholesky pivots of ``S Sᵀ`` must be at least this times the squared ones of their Gram matrix
-#: ``Jn Jnᵀ`` (what the ideal realization would give): below it, the Python route judges realizability.
+#: ``Jn Jnᵀ`` (what the ideal realization would give): below it, the Python step judges realizability.
 REALIZABLE_PIVOT = 1e-6
 #: Kept rows stay kept on the hot path while their sines against the rows kept before them exceed this — zero:
-#: only a failed factorization (NaN, the rows dependent to round-off) hands the state to the Python route. The
+#: only a failed factorization (NaN, the rows dependent to round-off) hands the state to the Python step. The
 #: decision of an open piece of the manifold holds through an isolated singular position (a parallelogram's
 #: collinear one), where only the instantaneous rank drops; the step there stays on the branch of the motion.
 KEPT_FLOOR = 0.0
 #: A pattern decided where its kept rows were clearly independent (smallest sine ≥
-#: :data:`~.redundancy.CLEARLY_INDEPENDENT`) hands the state back to the Python route once that sine falls below
-#: this: the rows turning dependent while others take over (a spatial loop turning), the Python route chooses
+#: :data:`~.redundancy.CLEARLY_INDEPENDENT`) hands the state back to the Python step once that sine falls below
+#: this: the rows turning dependent while others take over (a spatial loop turning), the Python step chooses
 #: anew (:func:`~.redundancy.chosen_rows`). A pattern decided with smaller sines (near a singular position, where
 #: no choice does better) keeps :data:`KEPT_FLOOR`.
 HOLD_FLOOR = 5e-3
@@ -122,7 +122,7 @@ FIELDS = (
 
 
 def _bounds(model: StepModel, closed: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Bounds on the unknowns (reactions, then contact forces ≥ 0) and the rows' kinds as 0 eq / 1 track."""
+    """Bounds on the unknowns (reactions, then contact forces ≥ 0) and the rows' roles as 0 eq / 1 track."""
     m, nc = model.m, len(closed)
     lower, upper = np.full(m + nc, -np.inf), np.full(m + nc, np.inf)
     lower[m:] = 0.0

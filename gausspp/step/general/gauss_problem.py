@@ -25,7 +25,7 @@ class GaussProblem:
     D : (n, m)         reaction directions
     J : (k, n)         rows of every constraint
     phi : (k,)         right-hand sides
-    kind : (k,) str    ``"eq"``, ``"track"`` or ``"ge"`` per row
+    role : (k,) str    ``"eq"``, ``"track"`` or ``"ge"`` per row
     lower, upper : (m,) bounds on ``u`` (``±inf`` when free)
     rows : names of the rows, for messages
     t : time, for messages
@@ -36,7 +36,7 @@ class GaussProblem:
     D: np.ndarray
     J: np.ndarray
     phi: np.ndarray
-    kind: Sequence[str]
+    role: Sequence[str]
     lower: np.ndarray
     upper: np.ndarray
     rows: Sequence[str] = ()
@@ -58,8 +58,8 @@ class GaussProblem:
         for name, (got, want) in expected.items():
             if got != want:
                 raise ShapeError(f"GaussProblem: {name} has shape {got}, expected {want}")
-        if len(self.kind) != k or not set(self.kind) <= {"eq", "track", "ge"}:
-            raise ShapeError(f"GaussProblem: kind needs one of 'eq', 'track', 'ge' per row ({k} rows)")
+        if len(self.role) != k or not set(self.role) <= {"eq", "track", "ge"}:
+            raise ShapeError(f"GaussProblem: role needs one of 'eq', 'track', 'ge' per row ({k} rows)")
         for name in ("A", "a0", "D", "J", "phi"):
             if not np.isfinite(getattr(self, name)).all():
                 raise NonFiniteError(f"GaussProblem: {name} is not finite{at(self.t)}")
@@ -112,8 +112,8 @@ class GaussSolution:
 
 
 @dataclass(frozen=True)
-class RowKinds:
-    """The rows of each kind of a problem, as read-only masks (and the tracked rows' indices)."""
+class RowRoles:
+    """The rows of each role in a problem, as read-only masks (and the tracked rows' indices)."""
 
     eq: np.ndarray
     track: np.ndarray
@@ -122,18 +122,18 @@ class RowKinds:
 
 
 @functools.lru_cache(maxsize=256)
-def _row_kinds(kind: tuple[str, ...]) -> RowKinds:
-    kinds = np.array(kind, dtype=str)
-    eq, track, ge = kinds == "eq", kinds == "track", kinds == "ge"
-    out = RowKinds(eq, track, ge, np.flatnonzero(track))
+def _row_roles(role: tuple[str, ...]) -> RowRoles:
+    roles = np.array(role, dtype=str)
+    eq, track, ge = roles == "eq", roles == "track", roles == "ge"
+    out = RowRoles(eq, track, ge, np.flatnonzero(track))
     for mask in (out.eq, out.track, out.ge, out.tracked):
         mask.flags.writeable = False
     return out
 
 
-def row_kinds(p: GaussProblem) -> RowKinds:
-    """:class:`RowKinds` of ``p`` (the same object for every problem with the same kinds)."""
-    return _row_kinds(tuple(p.kind))
+def row_roles(p: GaussProblem) -> RowRoles:
+    """:class:`RowRoles` of ``p`` (the same object for every problem with the same roles)."""
+    return _row_roles(tuple(p.role))
 
 
 def at(t: float) -> str:

@@ -1,6 +1,6 @@
 """The step by the general Gauss QP: contacts, bounded actuators, redundant rows.
 
-:func:`solve_at` evaluates the model's :class:`~gausspp.step.data.StepData`, poses the step as one
+:func:`solve_at` evaluates the model's :class:`~gausspp.step.data.StepProblem`, poses the step as one
 :class:`~gausspp.step.general.GaussProblem` (:mod:`gausspp.step.gauss_problem`), lets
 :func:`~gausspp.step.general.solve_general` solve it — deciding redundancy at the nearest state on
 the manifold (:mod:`gausspp.step.manifold`) — and packages the answer as a :class:`StepResult`.
@@ -15,7 +15,7 @@ import numpy as np
 from ...errors import InputError, NonFiniteError, RealizabilityError
 from ...workspace import workspace
 from .. import dense
-from ..data import NO_STAB, StepData, evaluate
+from ..data import NO_STAB, StepProblem, evaluate
 from ..protocol import StepModel
 from ..qp.casadi_conic import CasadiConic
 from ..realizability import margin_of, normalized_cosines
@@ -27,7 +27,7 @@ from .redundancy import CLEARLY_INDEPENDENT
 from .solve import CONSISTENCY_TOL, GaussProblem, GaussSolution, check_backend, resolve_backend, solve_general
 
 
-def _check_contacts(model: StepModel, t: float, d: StepData, closed: np.ndarray) -> None:
+def _check_contacts(model: StepModel, t: float, d: StepProblem, closed: np.ndarray) -> None:
     approaching = closed[d.gdotc[closed] < -model.contact_tol]
     if approaching.size:
         i = int(approaching[0])
@@ -39,7 +39,7 @@ def _check_contacts(model: StepModel, t: float, d: StepData, closed: np.ndarray)
         raise NonFiniteError(f"the mass matrix or the forces are not finite at t={t:.6g}; check the model there")
 
 
-def _problem(model: StepModel, t: float, d: StepData, closed: np.ndarray) -> tuple[GaussProblem, np.ndarray]:
+def _problem(model: StepModel, t: float, d: StepProblem, closed: np.ndarray) -> tuple[GaussProblem, np.ndarray]:
     """The problem, and the free acceleration ``A⁻¹ f`` (both solves on one factorization of ``A``)."""
     try:
         a0, free = dense.solve(d.A, np.column_stack([d.f + d.r0, d.f])).T
@@ -51,7 +51,7 @@ def _problem(model: StepModel, t: float, d: StepData, closed: np.ndarray) -> tup
 def _result(
     model: StepModel,
     t: float,
-    d: StepData,
+    d: StepProblem,
     problem: GaussProblem,
     free: np.ndarray,
     sol: GaussSolution,
@@ -118,7 +118,7 @@ def compiled_outputs(
 def _remember(
     model: StepModel, backend: str | None, closed: Any, tol: float, closed_rows_now: np.ndarray, sol: GaussSolution
 ) -> None:
-    """After the Python route decided: compile (once per pattern) the step of that decision, for the next states."""
+    """After the Python step decided: compile (once per pattern) the step of that decision, for the next states."""
     chosen = _backend(model, backend)
     if not isinstance(chosen, CasadiConic):
         return
@@ -133,7 +133,7 @@ def _remember(
 def _from_packed(
     model: StepModel, t: float, call: GeneralCall, out: np.ndarray, solution: bool = True
 ) -> tuple[StepResult, GaussSolution | None, dict[str, np.ndarray]]:
-    """The packed outputs of a compiled call as the Python route's three results (the solution only if asked)."""
+    """The packed outputs of a compiled call as the Python step's three results (the solution only if asked)."""
     f = {name: out[sl] for name, sl in call.slices.items()}
     m, k = model.m, model.k
     S = None if call.sparse else f["S"].reshape(call.k_all, call.m_all, order="F")
@@ -225,7 +225,7 @@ def solve_at(
 
     The third item holds ``qdot``, ``energy``, ``power_forces``, ``power_reaction``, ``g`` and ``S_norm``
     (the normalized ``J A⁻¹ D`` of the bilateral rows), named as the compiled kernels name them.
-    ``compiled=False`` takes the Python route even where the compiled call of the pattern decided would answer.
+    ``compiled=False`` takes the Python step even where the compiled call of the pattern decided would answer.
     """
     fast = compiled_outputs(model, t, q, v, lam, backend, stab, closed, consistency_tol) if compiled else None
     if fast is not None:

@@ -18,7 +18,7 @@ import numpy as np
 
 from ...errors import RealizabilityError
 from .. import dense
-from .gauss_problem import GaussProblem, at, row_kinds, row_names
+from .gauss_problem import GaussProblem, at, row_names, row_roles
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL, chosen_rows, independent_rows, sines_of
 from .scaling import Scaled, rank_of, scaled
 
@@ -138,8 +138,8 @@ def decide_rows(
     this state without being called a contradiction: what it misses there is the drift, amplified by the rows'
     vanishing angle, not another constraint.
     """
-    kinds = row_kinds(p)
-    eq, track = kinds.eq, kinds.track
+    roles = row_roles(p)
+    eq, track = roles.eq, roles.track
     ref = s
     kept, gap, sines = kept_rows(ref, eq)
     # rows that are independent here but not clearly so, or dependent rows that disagree, may be an artefact of

@@ -26,7 +26,7 @@ def closed_rows(model: StepModel, gc: np.ndarray, closed: Any) -> np.ndarray:
 class _Rows:
     """What the problem's rows and unknowns are for one set of closed contacts (the same at every state)."""
 
-    kind: tuple[str, ...]
+    role: tuple[str, ...]
     lower: np.ndarray  # read-only
     upper: np.ndarray  # read-only
     names: tuple[str, ...]
@@ -36,13 +36,13 @@ def _rows(model: StepModel, closed: np.ndarray) -> _Rows:
     m, nc = model.m, closed.size
     lower, upper = np.full(m + nc, -np.inf), np.full(m + nc, np.inf)
     lower[m:] = 0.0
-    kind = ["eq"] * model.k + ["ge"] * nc
+    role = ["eq"] * model.k + ["ge"] * nc
     for grp, bounds in zip(model.groups, model.group_bounds, strict=True):
         if bounds is not None:
             lower[grp.cols], upper[grp.cols] = bounds
-            kind[grp.rows] = ["track"] * (grp.rows.stop - grp.rows.start)
+            role[grp.rows] = ["track"] * (grp.rows.stop - grp.rows.start)
     lower.flags.writeable = upper.flags.writeable = False
-    return _Rows(tuple(kind), lower, upper, (*model.row_names, *(model.contact_row_names[i] for i in closed)))
+    return _Rows(tuple(role), lower, upper, (*model.row_names, *(model.contact_row_names[i] for i in closed)))
 
 
 def gauss_problem(
@@ -70,7 +70,7 @@ def gauss_problem(
         D=D,
         J=J,
         phi=phi.ravel(),
-        kind=rows.kind,
+        role=rows.role,
         lower=rows.lower,
         upper=rows.upper,
         rows=rows.names,

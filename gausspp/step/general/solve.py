@@ -54,7 +54,7 @@ import numpy as np
 
 from .. import dense, qp
 from ..qp import QP, QPBackend
-from .gauss_problem import GaussProblem, GaussSolution, RowKinds, at, row_kinds
+from .gauss_problem import GaussProblem, GaussSolution, RowRoles, at, row_roles
 from .kept_rows import NearManifold, Reference, decide_rows
 from .redundancy import DEPENDENCE_TOL, chosen_rows
 from .scaling import RANGE_TOL, RANK_TOL, Scaled, compress, range_basis, rank_of, scaled, svd_rank, truncated_pinv
@@ -87,13 +87,13 @@ def default_backend() -> str:
 
 def features(p: GaussProblem) -> frozenset[str]:
     """The QP forms (:data:`gausspp.step.qp.FORMS`) the stages of ``p`` may need."""
-    kind = set(p.kind)
+    roles = set(p.role)
     used = {"equality"}
     if np.isfinite(p.lower).any() or np.isfinite(p.upper).any():
         used.add("bounds")
-    if "ge" in kind:
+    if "ge" in roles:
         used.add("inequalities")
-    if "track" in kind:
+    if "track" in roles:
         used.add("least-squares")
     return frozenset(used)
 
@@ -137,8 +137,8 @@ class _Setup:
 
     @classmethod
     def build(cls, p: GaussProblem, s: Scaled, ref: Scaled, kept: np.ndarray, backend: QPBackend) -> _Setup:
-        kinds = row_kinds(p)
-        ge = kinds.ge
+        rows = row_roles(p)
+        ge = rows.ge
         lo, hi = np.asarray(p.lower, float) / s.unit * s.cs, np.asarray(p.upper, float) / s.unit * s.cs
         bounded = bool(np.isfinite(lo).any() or np.isfinite(hi).any())
         Ws = s.W / s.cs
@@ -158,7 +158,7 @@ class _Setup:
             p,
             s,
             kept,
-            kinds.tracked,
+            rows.tracked,
             ge,
             -s.S[ge],
             -s.r[ge],
@@ -167,18 +167,18 @@ class _Setup:
             bounded,
             Ws,
             rank_of(sv, DEPENDENCE_TOL),
-            _kept_cols(p, ref, kept, kinds),
+            _kept_cols(p, ref, kept, rows),
             Q,
             backend,
             at(p.t),
         )
 
 
-def _kept_cols(p: GaussProblem, ref: Scaled, kept: np.ndarray, kinds: RowKinds) -> np.ndarray:
+def _kept_cols(p: GaussProblem, ref: Scaled, kept: np.ndarray, rows: RowRoles) -> np.ndarray:
     """The reaction columns kept: those of the kept rows where the reactions are the rows themselves (``D = Jᵀ``,
     every row an equality: the columns of ``W`` are the whitened rows, and the rows' choice, held or pivoted, is
     theirs); otherwise the columns independent of those before them (:func:`~.redundancy.chosen_rows`)."""
-    if kinds.eq.all() and p.D.shape == p.J.T.shape and np.array_equal(p.D, p.J.T):
+    if rows.eq.all() and p.D.shape == p.J.T.shape and np.array_equal(p.D, p.J.T):
         return np.asarray(kept, dtype=int)
     return chosen_rows((ref.W / ref.cs).T, DEPENDENCE_TOL)[0]
 

@@ -5,14 +5,14 @@ overconstrained loop) has a block-diagonal ``A`` and banded rows ``J``; when its
 (``D = Jᵀ``), its general step on an open piece of the manifold is the equality step of the *kept* rows ``K``
 alone: the dropped rows are combinations of them and hold by themselves. The dense pattern of :mod:`.compiled`
 whitens with a dense Cholesky factor of ``A`` and tests every dropped row against the kept ones one by one —
-O(k³) nodes in the graph, 0.3 million at 82 rows. This route keeps the sparsity (casadi's symbolic sparse
+O(k³) nodes in the graph, 0.3 million at 82 rows. This call keeps the sparsity (casadi's symbolic sparse
 ``LDLᵀ`` with an approximate-minimum-degree order, as :mod:`gausspp.step.sparse`), so that the graph grows with
 the factors' entries:
 
 * ``A = Pᵀ L diag(d) Lᵀ P``; ``a₀ = A⁻¹(f + r₀)``; rows normalized in ``A⁻¹``: ``Jn = J/‖J‖_{A⁻¹}``;
 * the kept rows' Gram matrix ``G = Jn_K A⁻¹ Jn_Kᵀ`` (unit diagonal) by a sparse ``LDLᵀ``; ``G x = r_K`` with
   ``r = (φ − J a₀)/‖J‖_{A⁻¹}`` in the unit of :mod:`.scaling`. Near a singular position (a pivot of ``G`` below
-  :data:`~.compiled.SINGULAR_BAND`) the flag is down and the Python route answers; elsewhere the kept rows'
+  :data:`~.compiled.SINGULAR_BAND`) the flag is down and the Python step answers; elsewhere the kept rows'
   exact step, undamped (the dense pattern damps by ``drift · b²/(b² + σ⁴)``, which vanishes on the manifold);
 * the multipliers: the least-norm split over all rows, as the dense pattern gives it, up to
   :data:`LEAST_NORM_ROWS` dropped rows (one more solve each); beyond, ``u_K = x/‖J_K‖`` and ``u_D = 0`` — the
@@ -42,7 +42,7 @@ from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
 
-#: From this many bilateral rows on, a pattern that can take this route takes it: on the double parallelogram
+#: From this many bilateral rows on, a pattern that can take this call takes it: on the double parallelogram
 #: (12 rows) and larger, ``model.step`` is several times faster sparse than dense, the more so the more rows
 #: (``benchmarks/general_step.py`` prints the figures).
 SPARSE_FROM_ROWS = 8
@@ -58,7 +58,7 @@ COMBINATION_SEED = 20261125
 
 
 def applies(model: StepModel, kept_rows: tuple[int, ...], kept_cols: tuple[int, ...], closed: tuple[int, ...]) -> bool:
-    """Whether a pattern takes this route: ideal rows (``S`` symmetric by construction), no contacts, no bounds, rows
+    """Whether a pattern takes this call: ideal rows (``S`` symmetric by construction), no contacts, no bounds, rows
     and columns kept alike, many rows and a sparse ``A``."""
     if closed or model.contact_row_names or model.bounded or kept_rows != kept_cols:
         return False
@@ -79,7 +79,7 @@ def _combination(n: int) -> np.ndarray:
 def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float) -> list[Any]:
     """The packed outputs of :data:`.compiled.FIELDS` (``S`` empty), the flag and the closed-contacts flag, as SX
     expressions of the model's inputs (module docstring). ``band``: below this smallest pivot of the kept rows'
-    Gram matrix (unit diagonal) the flag is down — near a singular position the Python route answers."""
+    Gram matrix (unit diagonal) the flag is down — near a singular position the Python step answers."""
     p, mech = model.expressions, model.mechanism
     k, K = model.k, list(kept)
     D_rows = [i for i in range(k) if i not in kept]
@@ -127,7 +127,7 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
     residual = J @ a - p.phi
 
     # A positive definite; the kept rows clearly independent: in the band around a singular position (where the dense
-    # pattern damps in proportion to the drift) the Python route answers (NaN fails too)
+    # pattern damps in proportion to the drift) the Python step answers (NaN fails too)
     checks = [pivot_A > 0, ca.mmin(dG) >= band]
     relax = ca.fmin(1, ca.sqrt(smallest) / CLEARLY_INDEPENDENT)
     singular = ca.logic_not(relax > 0)
@@ -174,7 +174,7 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
         residual,
         p.Phi,
         a_free,
-        ca.SX(0, 1),  # S: not computed on this route
+        ca.SX(0, 1),  # S: not computed in this call
         ca.SX(0),
         ca.SX.zeros(model.m),
         ca.SX(0),
@@ -183,7 +183,7 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
         ca.dot(mech.v, mech.F_nc) if mech.F_nc is not None else ca.SX(0),
         ca.dot(mech.v, reaction),
         p.g if p.g is not None else ca.SX.zeros(k),
-        ca.SX(0, 1),  # no contact rows on this route
+        ca.SX(0, 1),  # no contact rows in this call
     ]
     packed = ca.vertcat(*(ca.vec(ca.densify(ca.SX(o))) for o in outs))
     ins_finite = ca.fabs(sum(ca.sum1(ca.vec(s)) for s in model.inputs)) < ca.inf

@@ -1,6 +1,6 @@
 """QP backends behind one registry: every QP form the project solves goes through :func:`get`.
 
-Two routes (docs/theory.md §3), each solving both forms of :mod:`.base` (the equality form of
+Two families (docs/theory.md §3), each solving both forms of :mod:`.base` (the equality form of
 the compiled step, and the general form — bounds, inequalities, least squares — of
 :mod:`gausspp.step.general`'s stages):
 
@@ -22,7 +22,7 @@ Defaults, one per form, declared here (:func:`default`):
 * the general QP: the first installed of :data:`GENERAL_DEFAULTS`, ``casadi:qrqp`` (always there: casadi's own
   active set, round-off accurate), then ``qpsolvers:daqp`` and ``qpsolvers:osqp``. qrqp is the one that sits
   inside the compiled general step (:mod:`gausspp.step.general.compiled`: one C call per step, the QP in the
-  graph); the Python route that decides redundancy and diagnoses a failed step solves its stages with the same
+  graph); the Python step that decides redundancy and diagnoses a failed step solves its stages with the same
   backend. daqp, OSQP and qrqp agree to round-off on ``benchmarks/general_qp.py``'s cases;
 * the cross-check's independent reference: the first installed of :data:`REFERENCE_DEFAULTS`.
 """
@@ -30,12 +30,13 @@ Defaults, one per form, declared here (:func:`default`):
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 
 from ...errors import BackendUnavailableError, InputError, UnknownNameError
-from . import qpsolvers_route
+from . import qpsolvers_backend
 from .base import ALL_FORMS, FORMS, QP, QPAnswer, QPBackend
 from .casadi_conic import PLUGINS, CasadiConic, plugin_available
-from .qpsolvers_route import QpsolversBackend
+from .qpsolvers_backend import QpsolversBackend
 
 #: Backends accurate to about 1e-7 only (HiGHS' QP): on a nearly singular stage — redundant rows off the
 #: constraint manifold — the general QP's optimality check refuses their answer with a QPSolveError that
@@ -48,6 +49,10 @@ GENERAL_DEFAULTS = ("casadi:qrqp", "qpsolvers:daqp", "qpsolvers:osqp")
 #: The cross-check's reference (:mod:`gausspp.verification.crosscheck`): exact dense active-set codes first,
 #: OSQP last; none of them the compiled step's default, so that the reference shares no solver with it.
 REFERENCE_DEFAULTS = ("qpsolvers:daqp", "qpsolvers:quadprog", "qpsolvers:osqp")
+#: Backends added from outside the two families: ``"family:solver"`` → a function making the backend (a
+#: :class:`QPBackend`). One entry here is the whole registration: :func:`get`, :func:`names` and every path that
+#: takes a ``backend=`` name then find it (``tests/test_extension_points.py`` registers a toy one).
+REGISTERED: dict[str, Callable[[], QPBackend]] = {}
 #: Each form's default, in order of preference.
 DEFAULTS: dict[str, tuple[str, ...]] = {
     "step": (DEFAULT,),
@@ -67,6 +72,7 @@ __all__ = [
     "QPAnswer",
     "QPBackend",
     "QpsolversBackend",
+    "REGISTERED",
     "canonical",
     "default",
     "get",
@@ -79,7 +85,7 @@ __all__ = [
 def names() -> list[str]:
     """Every backend name usable on this machine."""
     compiled = [f"casadi:{p}" for p in PLUGINS if plugin_available(p)]
-    return compiled + [f"qpsolvers:{s}" for s in qpsolvers_route.available()]
+    return compiled + [f"qpsolvers:{s}" for s in qpsolvers_backend.available()] + list(REGISTERED)
 
 
 def _unknown(name: str) -> UnknownNameError:
@@ -87,16 +93,16 @@ def _unknown(name: str) -> UnknownNameError:
 
 
 def canonical(name: str) -> str:
-    """``"route:solver"`` for ``name``; a bare solver name by the rule of the module docstring."""
+    """``"family:solver"`` for ``name``; a bare solver name by the rule of the module docstring."""
     if ":" in name:
         return name
-    if name in qpsolvers_route.available():
+    if name in qpsolvers_backend.available():
         return f"qpsolvers:{name}"
     if name in PLUGINS and plugin_available(name):
         return f"casadi:{name}"
     if name in PLUGINS:  # known to both routes perhaps, installed in neither: say what is missing
         return f"casadi:{name}"
-    if name in qpsolvers_route.known():
+    if name in qpsolvers_backend.known():
         return f"qpsolvers:{name}"
     raise _unknown(name)
 
@@ -111,11 +117,11 @@ def _make(name: str) -> QPBackend:
                 f"installed backends: {names()}"
             )
         return CasadiConic(solver)
-    if route == "qpsolvers" and solver in qpsolvers_route.known():
-        if solver not in qpsolvers_route.available():
+    if route == "qpsolvers" and solver in qpsolvers_backend.known():
+        if solver not in qpsolvers_backend.available():
             raise BackendUnavailableError(
                 f"QP backend {name!r}: qpsolvers has no solver {solver!r} installed here "
-                f"(installed: {qpsolvers_route.available()}); try `pip install qpsolvers[{solver}]`"
+                f"(installed: {qpsolvers_backend.available()}); try `pip install qpsolvers[{solver}]`"
             )
         return QpsolversBackend(solver)
     raise _unknown(name)
@@ -129,6 +135,11 @@ def get(name: str | QPBackend | None = None) -> QPBackend:
         name = DEFAULT
     if not isinstance(name, str):
         raise UnknownNameError(f"QP backend must be a name or a QPBackend, got {type(name).__name__}")
+    if name in REGISTERED:
+        backend = REGISTERED[name]()
+        if not isinstance(backend, QPBackend) or backend.name != name:
+            raise InputError(f"the QP backend registered as {name!r} must make a QPBackend named {name!r}")
+        return backend
     return _make(canonical(name))
 
 

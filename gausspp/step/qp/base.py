@@ -21,7 +21,7 @@ Two forms (docs/theory.md §3):
 
 A backend fulfils:
 
-1. ``name`` — ``"route:solver"``, e.g. ``"casadi:qrqp"`` or ``"qpsolvers:daqp"``;
+1. ``name`` — ``"family:solver"``, e.g. ``"casadi:qrqp"`` or ``"qpsolvers:daqp"``;
 2. ``compiled`` — ``True`` if :meth:`graph` poses the QP inside a casadi graph, so that a
    whole step is one C call; otherwise :meth:`solve` is called from Python each step;
 3. ``forms`` — the features of the general form it solves (:data:`FORMS`; ``"equality"`` alone: none);

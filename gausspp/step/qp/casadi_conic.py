@@ -1,4 +1,4 @@
-"""The compiled route: casadi's ``conic`` plugins, posed inside the model's casadi graph.
+"""The compiled family: casadi's ``conic`` plugins, posed inside the model's casadi graph.
 
 A step that uses one of these backends is a single C call (through ``Function.buffer()``),
 the QP included. Each plugin's options below ask for the accuracy the cross-check against

@@ -34,7 +34,7 @@ WHAT = (
     "crane margin at rope angles 0.3…1e-4 and at the vertical rope (step level); payload in free fall (accel = 0): "
     "the rope turns vertical at t* = √(2L(1 − cos θ0)/g), where the margin ∝ sin²θ touches zero without changing "
     "sign (so the guard on a sign change of det S cannot see it); integrated by RK45, DOP853, Radau, rk4, "
-    "rk4-compiled and cvodes"
+    "rk4 (compiled) and cvodes"
 )
 EXPECTED = (
     "margin = sin²θ·√(m/(m sin²θ + M0 cos²θ)), a warning with the time when it falls below 1e-6; every lane stops "
@@ -153,13 +153,13 @@ def _runs(quick: bool, fall: scenes.Scene) -> list[tuple[str, Model, str, dict[s
         ("DOP853, margin_error 1e-9", relaxed, "DOP853", dict(rtol=1e-9, atol=1e-12)),
         ("Radau", fall.model, "Radau", {}),
         ("rk4 dt=1e-3", fall.model, "rk4", dict(dt=1e-3)),
-        ("rk4-compiled dt=1e-3", fall.model, "rk4-compiled", dict(dt=1e-3)),
+        ("rk4 compiled dt=1e-3", fall.model, "rk4", dict(dt=1e-3, lane="compiled")),
         ("cvodes", fall.model, "cvodes", {}),
     ]
     if not quick:  # DOP853 at the default margin_error grinds many thousands of steps into t* (seconds)
         runs.insert(1, ("DOP853", fall.model, "DOP853", dict(rtol=1e-9, atol=1e-12)))
         runs += [
-            ("rk4-compiled dt=1e-5", fall.model, "rk4-compiled", dict(dt=1e-5)),
+            ("rk4 compiled dt=1e-5", fall.model, "rk4", dict(dt=1e-5, lane="compiled")),
             ("RK45 qp", fall.model, "RK45", dict(solver="qp")),
             ("BDF", fall.model, "BDF", {}),
         ]

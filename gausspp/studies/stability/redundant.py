@@ -263,15 +263,15 @@ def _contradictions(found: Findings) -> Section:
 def _simulations(found: Findings) -> Section:
     """E. simulate: solver='direct' must fail naming the redundancy; solver='qp' must follow the minimal model.
 
-    ``rk4-compiled`` runs the compiled step, which has no general QP: with solver='qp' it must refuse, naming the
-    redundancy. DOP853 is compared at 11 recorded times (its accepted steps may differ).
+    ``rk4`` in the compiled lane runs the compiled step, which has no general QP: with solver='qp' it must refuse,
+    naming the redundancy. DOP853 is compared at 11 recorded times (its accepted steps may differ).
     """
     scene, with_distance = pendulum_with_distance()
     off_q, off_v = pendulum_state(0.0, 0.0, 1e-3)
     runs = [
         ("rk4", None, scene.q0, scene.v0),
         ("rk4", "project", scene.q0, scene.v0),
-        ("rk4-compiled", "project", scene.q0, scene.v0),
+        ("rk4 compiled", "project", scene.q0, scene.v0),
         ("DOP853", "project", scene.q0, scene.v0),
         ("rk4", "project", off_q, off_v),
     ]
@@ -280,7 +280,8 @@ def _simulations(found: Findings) -> Section:
     for solver in ("direct", "qp"):
         for method, stab, q0, v0 in runs:
             key = f"{method}{' + project' if stab else ''}{' from δ = 1e-3' if q0 is off_q else ''}, {solver}"
-            options: dict[str, Any] = dict(dt=0.01, method=method, solver=solver, stabilize=stab)
+            lane = "compiled" if method.endswith("compiled") else None
+            options: dict[str, Any] = dict(dt=0.01, method=method.split()[0], lane=lane, solver=solver, stabilize=stab)
             if method == "DOP853":
                 options["record"] = np.linspace(0.0, 1.0, 11)
             with recorded(), quiet_c_output():
@@ -297,7 +298,7 @@ def _simulations(found: Findings) -> Section:
                     outcomes[key] = f"{type(exc).__name__}{' (says redundant)' if says else ''}: {str(exc)[:200]}"
                     named += solver == "direct" and says
                     # the compiled integrator has no general QP: its refusal naming the redundancy is right
-                    compiled_refused += solver == "qp" and method == "rk4-compiled" and says
+                    compiled_refused += solver == "qp" and method == "rk4 compiled" and says
                 except Exception as exc:  # noqa: BLE001 - a non-project exception is itself a finding
                     outcomes[key] = f"{type(exc).__name__} (not a project error)"
                     found.non_project.append(f"simulate {key}: {type(exc).__name__}: {exc}")

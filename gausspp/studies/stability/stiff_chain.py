@@ -47,14 +47,15 @@ class _Chain:
             return math.inf
         return float(max(np.max(np.abs(traj.q[-1] - self.qe)), np.max(np.abs(traj.v[-1] - self.ve))))
 
-    def rk4(self, n: int, method: str = "rk4-compiled") -> Trajectory:
+    def rk4(self, n: int, lane: str = "compiled") -> Trajectory:
         return simulate(
             self.model,
             self.q0,
             self.v0,
             self.t_end,
             dt=self.t_end / n,
-            method=method,
+            method="rk4",
+            lane=lane,
             solver="direct",
             record=n,
             throw=False,
@@ -124,7 +125,7 @@ def _rk4_figures(chain: _Chain, ratio: float, tol: float) -> dict[str, float]:
         out["rk4_next_larger_dt_error"] = chain.error(chain.rk4(lo))
     # the same step in the Python lane (one step evaluation per stage): work and wall time
     start = time.perf_counter()
-    py = chain.rk4(hi, "rk4")
+    py = chain.rk4(hi, "python")
     out["rk4_wall_s"] = time.perf_counter() - start
     out["rk4_evaluations"] = float(py.rhs_evaluations)
     out["rk4_error"] = chain.error(py)

@@ -1,7 +1,7 @@
-"""Servo-constraints beyond the one-step formula (issue 19): the diagnosis, the index-reduction route, the replay.
+"""Servo-constraints beyond the one-step formula (issue 19): the diagnosis, index reduction, the replay.
 
 The references are the scenes' flat solutions (gausspp/scenes/overhead_crane.py, spring_chain_servo.py), derived
-with numpy polynomials from the path alone — nothing of the route (no Lie derivative, no extension, no feedback).
+with numpy polynomials from the path alone — nothing of index reduction (no Lie derivative, no extension, no feedback).
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-from gausspp.servo.route import ServoTrajectory
+from gausspp.servo.index_reduction import ServoTrajectory
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def test_the_crane_follows_its_flat_solution(crane) -> None:
 def test_the_crane_is_diagnosed_mixed_of_index_five(crane) -> None:
     scene, traj = crane
     d = gp.servo_diagnosis(scene.model, 0.0, scene.q0, scene.v0)
-    assert (d.kind, d.index, d.unextended, d.degrees, d.chains) == ("mixed", 5, (2, 2), (4, 4), (0, 2))
+    assert (d.geometry, d.index, d.unextended, d.degrees, d.chains) == ("mixed", 5, (2, 2), (4, 4), (0, 2))
     assert (traj.index, traj.degrees, traj.chains) == (5, (4, 4), (0, 2)) and not d.one_step
     assert "mixed realization" in d.describe() and "DAE index 5" in d.describe()
 
@@ -66,7 +66,7 @@ def test_the_spring_chain_has_index_2n_plus_1_and_its_flat_force(n: int) -> None
     _, forces = exact(scene, traj.t)
     assert force_error(traj.forces, forces)[0] <= 5e-9  # measured 2.3e-11 … 9.1e-11 over n = 1 … 6
     assert force_error(traj.forces + 1e-7 * np.abs(forces).max(), forces)[0] > 5e-9
-    kind = gp.servo_diagnosis(scene.model, 0.0, scene.q0, scene.v0).kind
+    kind = gp.servo_diagnosis(scene.model, 0.0, scene.q0, scene.v0).geometry
     assert kind == ("orthogonal" if n == 1 else "tangential")  # one mass: the force acts on it directly
 
 
@@ -84,13 +84,13 @@ def test_the_spring_chain_has_index_2n_plus_1_and_its_flat_force(n: int) -> None
 def test_todays_scenes_are_orthogonal_or_oblique_and_one_step(name: str, params: dict, kind: str) -> None:
     scene = gp.scenes.get(name, **params)
     d = gp.servo_diagnosis(scene.model, 0.0, scene.q0, scene.v0)
-    assert d.kind == kind and d.one_step and not any(d.chains)
+    assert d.geometry == kind and d.one_step and not any(d.chains)
     assert max(d.degrees) <= 2  # the forces appear in the constraint's first (velocity rows) or second derivative
 
 
-def test_the_one_step_refusal_points_to_the_servo_route() -> None:
-    """model.step cannot keep the crane's path step by step and says which route can; gp.simulate takes that
-    route by itself (tests/test_servo_lane.py)."""
+def test_the_one_step_refusal_points_to_index_reduction() -> None:
+    """model.step cannot keep the crane's path step by step and says what can; gp.simulate takes
+    index reduction by itself (tests/test_servo_lane.py)."""
     scene = gp.scenes.get("overhead-crane")
     with pytest.raises(gp.RealizabilityError) as caught:
         scene.model.step(0.0, scene.q0, scene.v0)
@@ -128,7 +128,7 @@ def test_the_integral_principle_accepts_the_servo_motion_and_refuses_others(cran
     forces leaves the path and is refused."""
     from scipy.interpolate import CubicSpline
 
-    from gausspp.servo.route import ServoTrajectory
+    from gausspp.servo.index_reduction import ServoTrajectory
 
     scene, _ = crane
     traj = gp.simulate_servo(scene.model, scene.q0, scene.v0, scene.t_end, record=np.linspace(0, scene.t_end, 801))
@@ -144,7 +144,7 @@ def test_the_integral_principle_accepts_the_servo_motion_and_refuses_others(cran
         gp.verify(scene.model, pushed)
 
 
-def test_bad_input_to_the_servo_route_is_a_project_error() -> None:
+def test_bad_input_to_index_reduction_is_a_project_error() -> None:
     scene = gp.scenes.get("spring-chain-servo", n=2)
     model = scene.model
     with pytest.raises(gp.ShapeError, match="q has 3 entries, expected 2"):

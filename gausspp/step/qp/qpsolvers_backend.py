@@ -1,6 +1,6 @@
-"""The qpsolvers route: any QP solver installed in Python, by name.
+"""The qpsolvers family: any QP solver installed in Python, by name.
 
-qpsolvers sets a solver up anew on every call, so this route pays the set-up each step
+qpsolvers sets a solver up anew on every call, so this family pays the set-up each step
 (tens of microseconds); it is here for reach (every solver qpsolvers knows), not for speed. It solves
 both forms (:mod:`.base`): the equality form of the step and the general form of the stages,
 through ``qpsolvers.solve_problem``.

@@ -1,4 +1,4 @@
-"""The servo route: motions the one-step formula cannot reach, by index reduction (docs/theory.md, servo-constraints).
+"""Index reduction: motions the one-step formula cannot reach, by index reduction (docs/theory.md, servo-constraints).
 
 With the relative degrees ``rᵢ`` and the dynamic extension of :mod:`gausspp.step.servo_reach`, the servo problem
 becomes: the extended state ``z = (q, v, ξ)`` moves by ``ż = F(z, w, t)`` and the inputs ``w`` are those that make
@@ -46,7 +46,7 @@ class ServoTrajectory:
     constraint : (N, k) array
         The constrained quantities ``y`` (``g(q, t)`` or ``Φ``): zero along the prescribed path.
     degrees, unextended : tuple of int
-        The rows' relative degrees with the integrators the route added, and without.
+        The rows' relative degrees with the integrators index reduction added, and without.
     chains : tuple of int
         Integrators put in front of each actuator (the dynamic extension).
     index : int
@@ -158,7 +158,7 @@ def simulate_servo(
     nq, nv = model.nq, model.nv
     status, message = ("success", "") if sol.success else ("failed", str(sol.message))
     if not sol.success and Z.shape[0] == 0:
-        raise IntegrationError(f"the servo route failed at once: {sol.message}")
+        raise IntegrationError(f"index reduction failed at once: {sol.message}")
     return ServoTrajectory(
         t=sol.t,
         q=Z[:, :nq],
