@@ -74,7 +74,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "direct-sign",
         "dense direct step: whitened reaction z = -Ŝ⁻¹ r̂ (sign slip in the multiplier solve)",
-        "step/direct.py",
+        "step/equality/direct.py",
         "return ca.solve(red.S_hat, red.rhs_hat)",
         "return -ca.solve(red.S_hat, red.rhs_hat)",
         ("tests/test_crosscheck.py", "tests/test_gauss_principle.py", "tests/test_two_masses.py"),
@@ -82,7 +82,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "sparse-direct-sign",
         "sparse direct step: u = -S⁻¹ rhs (sign slip in the sparse multiplier solve)",
-        "step/kernel.py",
+        "step/equality/kernel.py",
         "sparse.sparse_outputs(p, sred, sred.solve_S(sred.rhs), None, refines)",
         "sparse.sparse_outputs(p, sred, -sred.solve_S(sred.rhs), None, refines)",
         ("tests/test_sparse_route.py",),
@@ -90,7 +90,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "compiled-qp-half",
         "compiled QP step: half the QP's whitened reaction, refinement off",
-        "step/qp_parts.py",
+        "step/equality/qp_parts.py",
         "results = outputs(p_in, red_in, x, rows_in * y, refines)",
         "results = outputs(p_in, red_in, 0.5 * x, rows_in * y, False)",
         ("tests/test_gauss_principle.py", "tests/test_crosscheck.py", "tests/test_checked_step.py"),
@@ -106,7 +106,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "dense-refine-r0",
         "dense refinement drops r₀: r1 = f − (A a − D u)",
-        "step/expressions.py",
+        "step/equality/expressions.py",
         "r1 = p.f + p.r0 - (p.A @ a - p.D @ u)",
         "r1 = p.f - (p.A @ a - p.D @ u)",
         (
@@ -119,7 +119,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "sparse-refine-r0",
         "sparse refinement drops r₀: r1 = f − (A a − D u) in sparse_outputs",
-        "step/sparse.py",
+        "step/equality/sparse.py",
         "r1 = p.f + p.r0 - (p.A @ a - p.D @ u)",
         "r1 = p.f - (p.A @ a - p.D @ u)",
         ("tests/test_sparse_route.py", "tests/test_general_sparse.py"),
@@ -127,7 +127,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "sparse-rhs-x1.1",
         "shared sparse reduction: right-hand side 1.1·(φ − J a₀) (sparse_reduce)",
-        "step/sparse.py",
+        "step/equality/sparse.py",
         "rhs = p.phi - p.J @ a0",
         "rhs = 1.1 * (p.phi - p.J @ a0)",
         ("tests/test_sparse_route.py", "tests/test_general_sparse.py"),
@@ -135,7 +135,7 @@ MUTANTS: tuple[Mutant, ...] = (
     Mutant(
         "dense-rhs-x1.1",
         "dense reduction: right-hand side 1.1·(φ − J a₀) (expressions.reduce)",
-        "step/expressions.py",
+        "step/equality/expressions.py",
         "rhs_hat = ca.solve(RJ.T, p.phi - p.J @ a0)",
         "rhs_hat = ca.solve(RJ.T, 1.1 * (p.phi - p.J @ a0))",
         ("tests/test_two_masses.py", "tests/test_gauss_principle.py", "tests/test_crosscheck.py"),

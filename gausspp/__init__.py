@@ -62,8 +62,8 @@ if TYPE_CHECKING:  # what the names below are, for type checkers and editors
     from .simulation.trajectory import Trajectory, load_trajectory
     from .step import qp, realizability
     from .step.data import StepProblem
+    from .step.equality.solve_numbers import solve
     from .step.results import StepResult
-    from .step.solve_numbers import solve
     from .studies import report, sweeps
     from .studies.sweeps import sweep
     from .verification.crosscheck import CrossCheck, acceleration_qp, crosscheck
@@ -125,7 +125,7 @@ _NAMES = {
     "Trajectory": "gausspp.simulation.trajectory",
     "load_trajectory": "gausspp.simulation.trajectory",
     "StepProblem": "gausspp.step.data",
-    "solve": "gausspp.step.solve_numbers",
+    "solve": "gausspp.step.equality.solve_numbers",
     "StepResult": "gausspp.step.results",
     "sweep": "gausspp.studies.sweeps",
     "CrossCheck": "gausspp.verification.crosscheck",

@@ -1,4 +1,5 @@
-"""The checked step's hot path (gausspp/step/checked_call.py): the same answer as the full step, every check kept.
+"""The checked step's hot path (gausspp/step/equality/checked_call.py): the same answer as the full step, every
+check kept.
 
 ``model.step`` answers from one buffer-bound call when the state is an array of the right shape and every
 check passes in the graph (an all-clear flag); otherwise the full step (``checked_step``) answers. These tests
@@ -19,7 +20,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import gausspp as gp
-from gausspp.step import checked
+from gausspp.step.equality import checked
 from gausspp.step.realizability import graph_cosines
 
 FIELDS = ("a", "u", "reaction", "residual", "constraint_value", "free_acceleration", "cosines")

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-import gausspp.step.kernel as kernel_module
+import gausspp.step.equality.kernel as kernel_module
 
 STATES_PER_MODEL = 300
 MIN_MARGIN = 1e-3  # states with a smaller realizability margin are drawn again (the answers lose 1/margin)

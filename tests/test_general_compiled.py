@@ -59,7 +59,7 @@ def python_step(model, t, q, v, lam):
 def compiled(model, t, q, v, lam):
     """The compiled call's answer at the state (after the Python step decided the pattern), or None."""
     general_step.solve_at(model, t, q, v, lam, None)  # decides and compiles the pattern (Python step if needed)
-    fast = general_step.compiled_outputs(model, t, q, v, lam, None, NO_STAB, None, CONSISTENCY_TOL)
+    fast = general_step.compiled_outputs(model, t, q, v, lam, None, stab=NO_STAB, consistency_tol=CONSISTENCY_TOL)
     return None if fast is None else general_step._from_packed(model, t, *fast)
 
 
@@ -187,7 +187,7 @@ def test_redundant_model_step_takes_the_compiled_general_step() -> None:
     sc = scenes.get("four-bar-redundant")
     m = sc.model
     first = m.step(0.0, sc.q0, sc.v0)
-    hot = general_step.compiled_outputs(m, 0.0, sc.q0, sc.v0, np.zeros(0), None, NO_STAB)
+    hot = general_step.compiled_outputs(m, 0.0, sc.q0, sc.v0, np.zeros(0), None, stab=NO_STAB)
     assert hot is not None
     again = m.step(0.0, sc.q0, sc.v0)
     assert again.disagreement(first) < 1e-12
@@ -202,7 +202,7 @@ def test_flag_down_when_the_contacts_change() -> None:
     compiled(model, t, q, v, lam)  # the resting pattern
     lifted = q.copy()
     lifted[1] += 0.5
-    assert general_step.compiled_outputs(model, t, lifted, v, lam, None, NO_STAB) is None
+    assert general_step.compiled_outputs(model, t, lifted, v, lam, None, stab=NO_STAB) is None
     flying = general_step.solve_at(model, t, lifted, v, lam, None)[0]
     assert np.allclose(flying.a, flying.free_acceleration) and not flying.contact_force.any()
 

@@ -38,7 +38,7 @@ def call_at(model: gp.Model, t: float, q: np.ndarray, v: np.ndarray):
     """The compiled call's result at the state (the Python step decided the pattern first), or None."""
     lam = np.zeros(0)
     general_step.solve_at(model, t, q, v, lam, None)
-    fast = general_step.compiled_outputs(model, t, q, v, lam, None, NO_STAB, None, CONSISTENCY_TOL)
+    fast = general_step.compiled_outputs(model, t, q, v, lam, None, stab=NO_STAB, consistency_tol=CONSISTENCY_TOL)
     return None if fast is None else (fast[0], general_step.result_of(model, t, *fast))
 
 

@@ -1,4 +1,5 @@
-"""The sparse step route (gausspp/step/sparse.py) against the dense one: the same step on every scene and on chains.
+"""The sparse step route (gausspp/step/equality/sparse.py) against the dense one: the same step on every scene and
+on chains.
 
 The two routes share the model's expressions and nothing of the elimination: the dense route whitens the reaction
 space with Cholesky factors of ``J A⁻¹ Jᵀ`` and ``Dᵀ A⁻¹ D``, the sparse one factors ``A`` and ``S = J A⁻¹ D``
@@ -12,7 +13,7 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-from gausspp.step import sparse
+from gausspp.step.equality import sparse
 
 FIELDS = ("a", "u", "reaction", "compulsion", "S_norm", "residual", "a_free", "qdot", "power_reaction")
 # servo scenes: no one-step solution; robot scenes: the robots extra (tests/test_robot_scenes.py)
@@ -168,8 +169,8 @@ def test_the_sparse_refinement_keeps_r0_against_the_reference(solver: str) -> No
     import casadi as ca
 
     from gausspp.step import qp
-    from gausspp.step.expressions import StepExpressions
-    from gausspp.step.kernel import build_kernel
+    from gausspp.step.equality.expressions import StepExpressions
+    from gausspp.step.equality.kernel import build_kernel
 
     from .factories import random_spd
 

@@ -258,7 +258,7 @@ def general_compiled(model: gp.Model, s: State) -> gp.StepResult:
     """The general Gauss QP's compiled call (the first call decides the pattern by the Python step and compiles it)."""
     model.general_step(s.t, s.q, s.v, s.lam)
     lam = np.zeros(0) if s.lam is None else np.asarray(s.lam, float)
-    fast = compiled_outputs(model, s.t, s.q, s.v, lam, None, np.zeros(2))
+    fast = compiled_outputs(model, s.t, s.q, s.v, lam, None, stab=np.zeros(2))
     assert fast is not None, "the compiled general step did not answer (its all-clear flag is down)"
     return result_of(model, s.t, *fast)
 

@@ -78,19 +78,8 @@ def run_phase(
     graph, d = phases.at(modes, q, v)
     step, chunk = graph.compiled() if codegen else (graph.step, graph.chunk)
     names = modes.names()
-
-    def keep(ts: np.ndarray, Y: np.ndarray, out: np.ndarray) -> None:
-        N, F, energy, _ = graph.split(out)
-        record.add(ts, Y.T, names, N.T, F.T, energy)
-
-    def sample(t0: float, y0: np.ndarray, upto: float) -> None:
-        """Record the requested times in ``(t0, upto)`` by a partial step from ``(t0, y0)``."""
-        if times is None:
-            return
-        for tau in times[(times > t0) & (times < upto)]:
-            y1, out1, _ = step(y0, d, tau - t0)
-            keep(np.array([tau]), y1.full(), out1.full())
-
+    samples = _Samples(graph, step, d, names, times, t_end, record)
+    keep, sample = samples.keep, samples.sample
     out0 = graph.report(q, v, d).full()
     keep(np.array([t]), y[:, None], out0)
     before = graph.split(out0)[3].ravel()
@@ -105,13 +94,7 @@ def run_phase(
             keep(ts[:j], Y[:, :j], out[:, :j])
             _refuse(ts[j], h, names, Y[:, j], out[:, j], float(jump[0, j]))
         starts = np.concatenate([[t], ts[:-1]])
-        if times is None:
-            keep(ts[:first], Y[:, :first], out[:, :first])
-        else:
-            for k in range(first):
-                sample(starts[k], Y[:, k - 1] if k else y, ts[k])
-                if ts[k] in times or ts[k] == t_end:
-                    keep(ts[k : k + 1], Y[:, k : k + 1], out[:, k : k + 1])
+        samples.steps(starts[:first], ts[:first], y, Y, out)
         if first == ts.size:
             t, y, before = float(ts[-1]), Y[:, -1].copy(), values[:, -1]
             if t >= t_end:
@@ -127,6 +110,39 @@ def run_phase(
             _refuse(t0 + h_star, h, names, y_star, out1.full().ravel(), float(jump1))
         keep(np.array([t0 + h_star]), y_star[:, None], out1.full())
         return t0 + h_star, y_star, fired
+
+
+class _Samples:
+    """What a phase records: every step, or only the requested ``times`` (by partial steps) and its ends."""
+
+    def __init__(
+        self, graph: PhaseGraph, step: Any, d: np.ndarray, names: tuple, times: Any, t_end: float, record: Record
+    ) -> None:
+        self.graph, self.step, self.d, self.names = graph, step, d, names
+        self.times, self.t_end, self.record = times, t_end, record
+
+    def keep(self, ts: np.ndarray, Y: np.ndarray, out: np.ndarray) -> None:
+        """Record the states ``Y`` (one column per time) and their outputs."""
+        N, F, energy, _ = self.graph.split(out)
+        self.record.add(ts, Y.T, self.names, N.T, F.T, energy)
+
+    def sample(self, t0: float, y0: np.ndarray, upto: float) -> None:
+        """Record the requested times in ``(t0, upto)`` by a partial step from ``(t0, y0)``."""
+        if self.times is None:
+            return
+        for tau in self.times[(self.times > t0) & (self.times < upto)]:
+            y1, out1, _ = self.step(y0, self.d, tau - t0)
+            self.keep(np.array([tau]), y1.full(), out1.full())
+
+    def steps(self, starts: np.ndarray, ends: np.ndarray, y: np.ndarray, Y: np.ndarray, out: np.ndarray) -> None:
+        """Record the steps ``starts[k] → ends[k]`` (``y`` the state at ``starts[0]``, ``Y`` at each end)."""
+        if self.times is None:
+            self.keep(ends, Y[:, : ends.size], out[:, : ends.size])
+            return
+        for k in range(ends.size):
+            self.sample(starts[k], Y[:, k - 1] if k else y, ends[k])
+            if ends[k] in self.times or ends[k] == self.t_end:
+                self.keep(ends[k : k + 1], Y[:, k : k + 1], out[:, k : k + 1])
 
 
 def _advance(

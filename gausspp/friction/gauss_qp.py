@@ -26,6 +26,8 @@ solver (Clarabel), independent of the direct solution's enumeration of modes (:m
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ..errors import BackendUnavailableError
@@ -37,6 +39,7 @@ def gauss_qp_step(
     state: ContactState,
     contacts: list[FrictionContact],
     closed: list[int],
+    *,
     slip_tol: float = 1e-10,
     cone: str | int = "exact",
     relaxed: bool = False,
@@ -45,25 +48,8 @@ def gauss_qp_step(
     non-slipping contact cannot stick while closed (infeasible: it slides, or lifts off). ``cone``: ``"exact"`` or
     a number of facets for two-component slips. ``relaxed`` keeps every normal row an inequality (the convex
     relaxation of the module docstring)."""
-    import scipy.sparse as sp
-
-    try:  # imported here: ``import gausspp`` does not load the conic solver
-        import clarabel
-    except ImportError:
-        raise BackendUnavailableError(
-            "gauss_qp_step solves the friction cone with Clarabel, which is not installed: pip install clarabel "
-            "(or gausspp[backends])"
-        ) from None
-
-    cols, kinds = [], []
-    for i in closed:
-        s = state.s[i]
-        if np.linalg.norm(s) > slip_tol:
-            cols.append(state.Jn[i] - contacts[i].mu * (s / np.linalg.norm(s)) @ state.Jt[i])
-            kinds.append((i, "slide"))
-        else:
-            cols += [state.Jn[i], *state.Jt[i]]
-            kinds += [(i, "N")] + [(i, j) for j in range(s.size)]
+    clarabel = _clarabel_module()
+    cols, unknowns = _columns(state, contacts, closed, slip_tol)
     a0 = np.linalg.solve(state.A, state.f)
     N, F = np.zeros(len(contacts)), [np.zeros(len(si)) for si in state.s]
     if not cols:
@@ -83,21 +69,66 @@ def gauss_qp_step(
         else:
             zero_rows.append(row)
             zero_b.append(rhs)
-    for k, (i, kind) in enumerate(kinds):
-        if kind in ("N", "slide"):  # N ≥ 0
-            e = np.zeros(n)
-            e[k] = -1.0
-            nonneg_rows.append(e)
+    for k, (i, what) in enumerate(unknowns):
+        if what in ("N", "slide"):  # N ≥ 0
+            nonneg_rows.append(-np.eye(n)[k])
             nonneg_b.append(0.0)
-        if kind == "N":
+        if what == "N":
             d, mu_s = state.s[i].size, contacts[i].mu_static
             for j in range(d):  # no slip
                 zero_rows.append(state.Jt[i][j] @ AinvC)
                 zero_b.append(state.phit[i][j] - state.Jt[i][j] @ a0)
             _cone_rows(k, d, mu_s, cone, n, nonneg_rows, nonneg_b, socs)
+    u = _clarabel(clarabel, P, (zero_rows, zero_b), (nonneg_rows, nonneg_b), socs)
+    if u is None:
+        return None
+    for k, (i, what) in enumerate(unknowns):
+        if what in ("N", "slide"):
+            N[i] = u[k]
+        if what == "slide":
+            F[i] = -contacts[i].mu * u[k] * state.s[i] / np.linalg.norm(state.s[i])
+        elif what != "N":
+            F[i][what] = u[k]
+    return a0 + AinvC @ u, N, F
+
+
+def _columns(
+    state: ContactState, contacts: list[FrictionContact], closed: list[int], slip_tol: float
+) -> tuple[list[np.ndarray], list[tuple[int, Any]]]:
+    """The reaction's columns and what each unknown is: ``(contact, "slide")`` for a slipping contact (one column
+    ``J_nᵀ − μ J_tᵀ ŝ``), ``(contact, "N")`` and ``(contact, j)`` for a non-slipping one (``J_nᵀ`` and ``J_tᵀ``)."""
+    cols: list[np.ndarray] = []
+    unknowns: list[tuple[int, Any]] = []
+    for i in closed:
+        s = state.s[i]
+        if np.linalg.norm(s) > slip_tol:
+            cols.append(state.Jn[i] - contacts[i].mu * (s / np.linalg.norm(s)) @ state.Jt[i])
+            unknowns.append((i, "slide"))
+        else:
+            cols += [state.Jn[i], *state.Jt[i]]
+            unknowns += [(i, "N")] + [(i, j) for j in range(s.size)]
+    return cols, unknowns
+
+
+def _clarabel_module() -> Any:
+    """Clarabel, imported here (``import gausspp`` does not load the conic solver), or the error that says so."""
+    try:
+        import clarabel
+    except ImportError:
+        raise BackendUnavailableError(
+            "gauss_qp_step solves the friction cone with Clarabel, which is not installed: pip install clarabel "
+            "(or gausspp[backends])"
+        ) from None
+    return clarabel
+
+
+def _clarabel(clarabel: Any, P: np.ndarray, zero: tuple, nonneg: tuple, socs: list) -> np.ndarray | None:
+    """``min ½ uᵀPu`` over ``u`` with the rows ``zero`` (``(rows, b)``: ``row·u = b``), ``nonneg`` (``row·u ≤ b``)
+    and the second-order cones ``socs`` (``−rows·u`` in the cone), by Clarabel; ``None`` where it finds none."""
+    import scipy.sparse as sp
+
     blocks, b, cones = [], [], []
-    linear = ((zero_rows, zero_b, clarabel.ZeroConeT), (nonneg_rows, nonneg_b, clarabel.NonnegativeConeT))
-    for rows, rhs, make in linear:
+    for (rows, rhs), make in ((zero, clarabel.ZeroConeT), (nonneg, clarabel.NonnegativeConeT)):
         if rows:
             blocks.append(np.array(rows))
             b += list(rhs)
@@ -109,22 +140,12 @@ def gauss_qp_step(
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.tol_gap_abs = settings.tol_gap_rel = settings.tol_feas = 1e-12
+    n = P.shape[0]
     solver = clarabel.DefaultSolver(
         sp.csc_matrix(np.triu(P)), np.zeros(n), sp.csc_matrix(np.vstack(blocks)), np.array(b), cones, settings
     )
     result = solver.solve()
-    if str(result.status) not in ("Solved", "AlmostSolved"):
-        return None
-    u = np.array(result.x)
-    for k, (i, kind) in enumerate(kinds):
-        if kind == "N":
-            N[i] = u[k]
-        elif kind == "slide":
-            N[i] = u[k]
-            F[i] = -contacts[i].mu * u[k] * state.s[i] / np.linalg.norm(state.s[i])
-        else:
-            F[i][kind] = u[k]
-    return a0 + AinvC @ u, N, F
+    return np.array(result.x) if str(result.status) in ("Solved", "AlmostSolved") else None
 
 
 def _cone_rows(k: int, d: int, mu_s: float, cone: str | int, n: int, nonneg: list, nonneg_b: list, socs: list) -> None:

@@ -15,7 +15,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ShapeError
-from ..step.expressions import StepExpressions
+from ..step.equality.expressions import StepExpressions
 from ..step.protocol import ContactExpressions, Group
 from .constraint_expressions import ConstraintExpressions
 from .constraints import Constraint, Unilateral

@@ -13,7 +13,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..step.kernel import Bound, dense_outputs, load_inputs
+from ..step.equality.kernel import Bound, dense_outputs, load_inputs
 from ..workspace import workspace
 from .constraints import Holonomic
 from .model import Model

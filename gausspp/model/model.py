@@ -24,15 +24,16 @@ from ..errors import (
     RealizabilityError,
     ShapeError,
 )
-from ..step import checked, data, servo_reach
+from ..step import data, servo_reach
 from ..step import impact as impact_step
 from ..step.data import NO_STAB, StepProblem
+from ..step.equality import checked
+from ..step.equality.kernel import Kernel
+from ..step.equality.sparse import choose_route
 from ..step.general import GaussSolution, general_step, manifold
-from ..step.kernel import Kernel
 from ..step.qp import QPBackend
 from ..step.realizability import symmetric_by_construction
 from ..step.results import ImpactResult, StepResult
-from ..step.sparse import choose_route
 from ..validation import flag, positive, short
 from .assembly import assemble, assemble_contacts
 from .constraints import Constraint, Unilateral
@@ -62,10 +63,10 @@ class Model:
     contact_tol : float
         A contact whose gap is within this of zero is closed.
     route : {"auto", "dense", "sparse"}
-        How the compiled step eliminates the acceleration (:mod:`gausspp.step.sparse`): ``"dense"`` in whitened
+        How the compiled step eliminates the acceleration (:mod:`gausspp.step.equality.sparse`): ``"dense"`` in whitened
         reaction space (robust to a badly conditioned ``A``; O(k³) graph), ``"sparse"`` in the mechanism's
         own sparsity (linear in the number of bodies for chains and trees); ``"auto"`` picks by size and
-        sparsity (:func:`gausspp.step.sparse.choose_route`). The chosen one is ``model.route``.
+        sparsity (:func:`gausspp.step.equality.sparse.choose_route`). The chosen one is ``model.route``.
     codegen : bool
         Run the compiled lane's step as C (:mod:`gausspp.c_code`): many times faster per step, after a
         compilation of seconds for a large model, kept on disk for the next process. Without a C compiler the
@@ -281,7 +282,9 @@ class Model:
         Returns the :class:`StepResult` and the QP's own :class:`~gausspp.step.general.GaussSolution`.
         """
         t, q, v, lam = self.checked_state(t, q, v, lam)
-        result, sol, _ = general_step.solve_at(self, t, q, v, lam, checked.backend_name(backend), stab, closed)
+        result, sol, _ = general_step.solve_at(
+            self, t, q, v, lam, checked.backend_name(backend), stab=stab, closed=closed
+        )
         return result, sol
 
     def impact(
@@ -337,7 +340,7 @@ class Model:
 
         See :func:`gausspp.step.general.general_step.solve_at`.
         """
-        return general_step.solve_at(self, t, q, v, lam, backend, stab, closed)
+        return general_step.solve_at(self, t, q, v, lam, backend, stab=stab, closed=closed)
 
     def __repr__(self) -> str:
         cons = ", ".join(f"{n} ({c.realization.label})" for n, c in zip(self.names, self.constraints, strict=True))

@@ -24,8 +24,6 @@ import functools
 import numpy as np
 
 from ..errors import GaussppError
-from ..model.urdf import URDFMechanism
-from ..simulation import lanes
 from .scene import Scene
 
 #: The categories, in the order the rules above try them.
@@ -36,6 +34,9 @@ RANK_TOL = 1e-9
 
 def category_of(scene: Scene) -> str:
     """The category of a built scene (module docstring)."""
+    from ..model.urdf import URDFMechanism  # imported here: listing the scenes loads no lane table
+    from ..simulation import lanes
+
     model = scene.model
     if isinstance(model.mechanism, URDFMechanism):
         return "robot"

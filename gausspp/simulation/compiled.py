@@ -18,8 +18,8 @@ from ..disk_cache import cached_function
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError, RealizabilityError
 from ..model.model import Model
 from ..step import realizability
-from ..step.expressions import OUTPUTS, reduce
-from ..step.kernel import CompiledKernel, only_outputs
+from ..step.equality.expressions import OUTPUTS, reduce
+from ..step.equality.kernel import CompiledKernel, only_outputs
 from ..step.qp.casadi_conic import stdout_silenced
 from ..step.realizability import MARGIN_BOUND_ROWS
 from ..workspace import workspace
@@ -28,7 +28,7 @@ from . import methods as _methods
 from .drift import Stabilization, projection_function
 from .inputs import Options
 from .rhs import RightHandSide
-from .samples import Samples
+from .samples import Samples, fixed_grid, kept_steps
 
 #: CVODES gives up after this many internal steps (seconds on a small model) instead of stalling.
 MAX_CVODES_STEPS = 100_000
@@ -42,7 +42,7 @@ def rhs_function(model: Model, solver: str, backend: str | None, *, with_solutio
     With ``solver="direct"`` the result is a pure SX function (one flat instruction list); with
     a casadi QP backend an MX graph around the conic node, computing only what ``y'`` needs.
     ``with_solution``: a second output, the QP's solution ``(z, y)`` (empty for the direct step), so that the
-    recording can replay the step without solving its QP again (:meth:`~gausspp.step.kernel.QPParts.replay`).
+    recording can replay the step without solving its QP again (:meth:`~gausspp.step.equality.kernel.QPParts.replay`).
     """
     kernel = model.kernel(solver, backend)
     if not isinstance(kernel, CompiledKernel):
@@ -146,9 +146,8 @@ def integrate_compiled(
     if meth.name in CVODES:
         return cvodes_run(rhs_function(model, solver, backend), opts, stab=stab, y0=y0)
     assert meth.tableau is not None and dt is not None
-    n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
-    times = t0 + dt * np.arange(n_steps + 1)
-    times[-1] = t_end
+    times = fixed_grid(t0, t_end, dt)
+    n_steps = times.size - 1
     step, run = _compiled_run(model, solver, backend, meth, stab, n_steps)
     h, s = np.diff(times)[None, :], np.array(stab.stab)
     try:
@@ -166,11 +165,10 @@ def integrate_compiled(
     low = _margin_failure(model, times[: bounds.size], bounds[: times.size])
     if low is not None and low[0] > 0:  # a state whose margin vanished is not kept, nor anything after it
         Y, times, failure = Y[: low[0]], times[: low[0]], low[1]
-    if np.isscalar(record):
-        keep = _record_indices(times.size - 1, record)
-    else:  # after a failure only the requested times that were reached can be kept
-        wanted = np.asarray(record, float)
-        keep = _on_grid(times, wanted[wanted <= times[-1] + 1e-12] if failure else wanted)
+    if failure is not None and not np.isscalar(record):  # only the requested times that were reached can be kept
+        record = np.asarray(record, float)
+        record = record[record <= times[-1] + 1e-12]
+    keep = kept_steps(times, record)
     steps = times.size - 1
     kept_solutions = None
     if solver != "direct" and not np.any(s):  # unstabilized: the first stage is the step the recording replays
@@ -230,19 +228,6 @@ def _diagnose(model: Model, solver: str, backend: str | None, t: float, y: np.nd
         f"the state became NaN or inf in the step from t={t:.6g} to t={t_next:.6g}: a stage of the step failed "
         "(unrealizable, mass matrix not positive definite, or unstable for this dt); reduce dt or use a stiff method"
     )
-
-
-def _record_indices(last: int, every: Any) -> np.ndarray:
-    idx = np.arange(0, last + 1, max(int(every), 1))
-    return idx if idx[-1] == last else np.append(idx, last)
-
-
-def _on_grid(times: np.ndarray, record: Any) -> np.ndarray:
-    wanted = np.asarray(record, float)
-    idx = np.searchsorted(times, wanted - 1e-12)
-    if np.any(idx >= times.size) or np.any(np.abs(times[np.minimum(idx, times.size - 1)] - wanted) > 1e-9):
-        raise InputError("record times must lie on the fixed-step grid t0 + i·dt within [t0, t_end]")
-    return idx
 
 
 #: The CVODES methods and their linear multistep family (Adams with functional iteration needs no Jacobian).

@@ -34,8 +34,8 @@ from ..disk_cache import cached_function
 from ..model.model import Model
 from ..step import realizability
 from ..step.bound import Bound
-from ..step.expressions import OUTPUTS
-from ..step.kernel import CompiledKernel
+from ..step.equality.expressions import OUTPUTS
+from ..step.equality.kernel import CompiledKernel
 from ..step.outcome import QP_TOLERANCE
 from ..workspace import workspace
 from .rhs import RightHandSide

@@ -12,7 +12,7 @@ import casadi as ca
 import numpy as np
 from scipy.integrate._ivp.rk import RungeKutta
 
-from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError
+from ..errors import GaussppError, IntegrationError, NonFiniteError
 from ..model.model import Model
 from ..workspace import workspace
 from . import compiled_adaptive, crossing, inputs
@@ -22,7 +22,7 @@ from .initial import Projection, projection
 from .lanes import Job
 from .progress import Progress
 from .rhs import AnyRightHandSide, step_control_atol
-from .samples import Samples
+from .samples import Samples, fixed_grid, kept_steps
 
 
 def run_python(job: Job) -> Samples:
@@ -31,8 +31,9 @@ def run_python(job: Job) -> Samples:
     rhs, model, stab, opts, y0, redundant = job.rhs, job.model, job.stab, job.opts, job.y0, job.redundant
     meth, t0, t_end, dt = opts.method, opts.t0, opts.t_end, opts.dt
     assert dt is not None  # checked for fixed-step methods
-    n_steps = int(np.ceil((t_end - t0) / dt - 1e-9))
-    keep = keep_indices(n_steps, t0, dt, opts.record)
+    grid = fixed_grid(t0, t_end, dt)
+    n_steps = grid.size - 1
+    keep = kept_steps(grid, opts.record)
     ts, ys = np.empty(keep.size), np.empty((keep.size, y0.size))
     project = projection(model, redundant) if stab.project else None
     y, slot, t = y0.copy(), 0, t0
@@ -82,23 +83,6 @@ def _one_step(
     if not np.isfinite(y.sum()):
         raise NonFiniteError(f"the state became NaN or inf at t={t_next:.6g}; reduce dt or use a stiff method")
     return y
-
-
-def keep_indices(n_steps: int, t0: float, dt: float, record: Any) -> np.ndarray:
-    """The step numbers to keep: every ``record``-th (and the last), or those at the ``record`` times."""
-    if np.isscalar(record):
-        every = int(record)  # type: ignore[arg-type]  # checked by check_record
-        idx = np.arange(0, n_steps + 1, every)
-        return idx if idx[-1] == n_steps else np.append(idx, n_steps)
-    times = np.asarray(record, float)
-    idx = np.rint((times - t0) / dt).astype(int)
-    if (
-        np.any(np.abs(t0 + idx * dt - times) > 1e-9 * max(1.0, abs(times).max()))
-        or np.any(idx < 0)
-        or np.any(idx > n_steps)
-    ):
-        raise InputError("record times must lie on the fixed-step grid t0 + i·dt within [t0, t_end]")
-    return np.unique(idx)
 
 
 def run_scipy(job: Job) -> Samples:

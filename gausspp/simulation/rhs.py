@@ -16,9 +16,9 @@ from ..errors import NonFiniteError
 from ..model.model import Model
 from ..step import qp
 from ..step.bound import sparse_output
-from ..step.expressions import OUTPUTS
+from ..step.equality.expressions import OUTPUTS
+from ..step.equality.kernel import Bound, CompiledKernel
 from ..step.general import check_backend, general_step
-from ..step.kernel import Bound, CompiledKernel
 from ..step.outcome import QP_TOLERANCE, Where, evaluation_failed, step_margin, to_result
 from ..step.realizability import stacked_margins
 from ..workspace import workspace
@@ -337,7 +337,7 @@ class GeneralRightHandSide(_StateDerivative):
             )
         m = self.model
         stab = self.stab if stabilized else _NO_STAB
-        fast = general_step.compiled_outputs(m, float(t), y[sq], y[sv], y[sl], self.backend, stab)
+        fast = general_step.compiled_outputs(m, float(t), y[sq], y[sv], y[sl], self.backend, stab=stab)
         if fast is not None:
             return general_step.rhs_outputs(m, *fast)
         res, _, extras = m.general_step_full(

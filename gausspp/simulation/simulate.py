@@ -184,7 +184,7 @@ def _servo_advice(model: Model, t0: float, y0: np.ndarray, run: Callable[[], Tra
 
 def _labelled(lane: str, route: str, run: Callable[[], Trajectory]) -> Trajectory:
     """The trajectory ``run`` returns, or carries on the error it raises, with ``lane`` (the lane that ran it)
-    and ``route`` (the step's, :mod:`gausspp.step.sparse`)."""
+    and ``route`` (the step's, :mod:`gausspp.step.equality.sparse`)."""
     try:
         return replace(run(), lane=lane, route=route)
     except GaussppError as exc:

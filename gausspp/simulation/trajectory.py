@@ -59,7 +59,7 @@ class Trajectory:
         :mod:`gausspp.simulation.servo_lane`); ``""`` for a trajectory not made by :func:`gausspp.simulate`.
     route : str
         How each step eliminated the acceleration: ``"dense"`` or ``"sparse"`` (the model's ``route``,
-        :mod:`gausspp.step.sparse`); ``""`` for a trajectory not made by :func:`gausspp.simulate`.
+        :mod:`gausspp.step.equality.sparse`); ``""`` for a trajectory not made by :func:`gausspp.simulate`.
     steps, rhs_evaluations : int
     contact_force : (N, n_contact_rows) array
         Multipliers of unilateral contacts (≥ 0; empty second axis without contacts).

@@ -1,8 +1,9 @@
 """A step's data as numbers at one instant: :class:`StepProblem`, the one type between the model's expressions
-(:class:`~gausspp.step.expressions.StepExpressions`) and the step's answer (:class:`~gausspp.step.results.StepResult`).
+(:class:`~gausspp.step.equality.expressions.StepExpressions`) and the step's answer
+(:class:`~gausspp.step.results.StepResult`).
 
 Its first fields are ``A, f, r₀, J, φ, D, Φ`` of docs/theory.md §2: what :meth:`Model.step_data` returns, what
-:func:`gausspp.step.solve_numbers.solve` takes, and what the diagnosis of a failed step
+:func:`gausspp.step.equality.solve_numbers.solve` takes, and what the diagnosis of a failed step
 (:mod:`gausspp.step.outcome`) reads; :meth:`StepProblem.create` builds them from numbers given by hand. Evaluated
 at a model's state ``(t, q, v, λ)`` with Baumgarte terms ``stab = (α, β)`` (:func:`evaluate`, one compiled function
 kept in the model's workspace) it also carries what the general step, the projection onto the constraints and the
@@ -20,7 +21,7 @@ import numpy as np
 
 from ..errors import InputError, NonFiniteError, ShapeError
 from ..workspace import workspace
-from .kernel import Bound, dense_outputs, load_inputs
+from .equality.kernel import Bound, dense_outputs, load_inputs
 from .protocol import StepModel
 
 NO_STAB = np.zeros(2)

@@ -12,7 +12,7 @@ from typing import Any, NamedTuple, Protocol
 import casadi as ca
 import numpy as np
 
-from .expressions import StepExpressions
+from .equality.expressions import StepExpressions
 
 
 class Group(NamedTuple):

@@ -75,7 +75,7 @@ class StepResult:
     @classmethod
     def of_checked(cls, fields: dict[str, object]) -> StepResult:
         """The result with ``fields`` (every field but ``contact_force``, ``tracking_error`` and ``saturated``,
-        which take their defaults), already checked: the hot path of :mod:`gausspp.step.checked_call`. The same
+        which take their defaults), already checked: the hot path of :mod:`gausspp.step.equality.checked_call`. The same
         object as ``StepResult(**fields)``, built without the frozen dataclass's ``__init__`` (a per-field
         ``object.__setattr__``, a large part of a small step's cost). Takes ``fields`` over as the result's
         ``__dict__``."""

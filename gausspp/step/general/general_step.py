@@ -103,6 +103,7 @@ def compiled_outputs(
     v: np.ndarray,
     lam: np.ndarray,
     backend: str | None,
+    *,
     stab: Any,
     closed: Any = None,
     consistency_tol: float = CONSISTENCY_TOL,
@@ -216,6 +217,7 @@ def solve_at(
     v: np.ndarray,
     lam: np.ndarray,
     backend: str | None,
+    *,
     stab: Any = NO_STAB,
     closed: Any = None,
     consistency_tol: float = CONSISTENCY_TOL,
@@ -227,7 +229,11 @@ def solve_at(
     (the normalized ``J A⁻¹ D`` of the bilateral rows), named as the compiled kernels name them.
     ``compiled=False`` takes the Python step even where the compiled call of the pattern decided would answer.
     """
-    fast = compiled_outputs(model, t, q, v, lam, backend, stab, closed, consistency_tol) if compiled else None
+    fast = (
+        compiled_outputs(model, t, q, v, lam, backend, stab=stab, closed=closed, consistency_tol=consistency_tol)
+        if compiled
+        else None
+    )
     if fast is not None:
         return _from_packed(model, t, fast[0], fast[1])  # type: ignore[return-value]
     given = closed

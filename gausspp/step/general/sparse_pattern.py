@@ -6,7 +6,7 @@ overconstrained loop) has a block-diagonal ``A`` and banded rows ``J``; when its
 alone: the dropped rows are combinations of them and hold by themselves. The dense pattern of :mod:`.compiled`
 whitens with a dense Cholesky factor of ``A`` and tests every dropped row against the kept ones one by one —
 O(k³) nodes in the graph, 0.3 million at 82 rows. This call keeps the sparsity (casadi's symbolic sparse
-``LDLᵀ`` with an approximate-minimum-degree order, as :mod:`gausspp.step.sparse`), so that the graph grows with
+``LDLᵀ`` with an approximate-minimum-degree order, as :mod:`gausspp.step.equality.sparse`), so that the graph grows with
 the factors' entries:
 
 * ``A = Pᵀ L diag(d) Lᵀ P``; ``a₀ = A⁻¹(f + r₀)``; rows normalized in ``A⁻¹``: ``Jn = J/‖J‖_{A⁻¹}``;
@@ -36,8 +36,8 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..equality.sparse import sparse_reduce
 from ..protocol import StepModel
-from ..sparse import sparse_reduce
 from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import casadi as ca
 
-from ..errors import InputError
+from ...errors import InputError
 from .expressions import Reduced
 
 

@@ -9,7 +9,7 @@ on inputs written into ``kernel.inputs`` in place):
   the QP, the backend solves it, a second call finishes the step.
 
 :func:`build_kernel` makes either from a step's expressions, by the dense route (whitened reaction space,
-:mod:`gausspp.step.expressions`) or the sparse one (the mechanism's sparsity, :mod:`gausspp.step.sparse`).
+:mod:`.expressions`) or the sparse one (the mechanism's sparsity, :mod:`.sparse`).
 """
 
 from __future__ import annotations
@@ -19,12 +19,12 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..bound import Bound, dense_outputs, load_inputs, only_outputs
+from ..qp import QPBackend
+from ..qp.casadi_conic import stdout_silenced
 from . import sparse
-from .bound import Bound, dense_outputs, load_inputs, only_outputs
 from .direct import direct_reaction, require_square
 from .expressions import OUTPUTS, StepExpressions, outputs, reduce, well_conditioned_constant
-from .qp import QPBackend
-from .qp.casadi_conic import stdout_silenced
 from .qp_parts import QPParts, guarded, qp_parts
 
 __all__ = ["Bound", "CompiledKernel", "Kernel", "PythonQPKernel", "build_kernel", "dense_outputs", "load_inputs"]
@@ -107,7 +107,7 @@ def build_kernel(
     route: str = "dense",
 ) -> Kernel:
     """Compile the step ``p`` (expressions of ``inputs``) for ``solver`` ∈ {"direct", "qp"} by ``route`` ∈
-    {"dense", "sparse"} (:func:`gausspp.step.sparse.choose_route` picks one)."""
+    {"dense", "sparse"} (:func:`gausspp.step.equality.sparse.choose_route` picks one)."""
     if solver == "direct":
         if route == "sparse":
             sred = sparse.sparse_reduce(p)

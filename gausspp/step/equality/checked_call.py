@@ -1,6 +1,6 @@
 """The checked step's hot path: :meth:`gausspp.Model.step` in one buffer-bound call and one flag.
 
-A :class:`CheckedCall` wraps a compiled step kernel (:mod:`gausspp.step.kernel`) into one casadi
+A :class:`CheckedCall` wraps a compiled step kernel (:mod:`gausspp.step.equality.kernel`) into one casadi
 function of ``(t, q, v, λ)`` whose output is a single packed vector: the step's results and one
 *all-clear flag*. The flag is 1 exactly when every check :func:`~gausspp.step.outcome.to_result`
 makes would pass:
@@ -14,7 +14,7 @@ makes would pass:
 * for a QP, its relative primal and dual residuals ``≤`` :data:`~gausspp.step.outcome.QP_TOLERANCE`.
 
 Any other case — a list instead of an array, a wrong shape, a flag of 0 — returns ``None``, and
-:meth:`~gausspp.Model.step` takes the full step (:func:`gausspp.step.checked.checked_step`), which
+:meth:`~gausspp.Model.step` takes the full step (:func:`gausspp.step.equality.checked.checked_step`), which
 diagnoses, raises the project error or warns, and falls back to the general QP where it should. The
 hot path thus costs a few numpy assignments, one C call and one small copy, and answers exactly what
 the full step answers.
@@ -28,11 +28,11 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..outcome import QP_TOLERANCE
+from ..realizability import graph_cosines, margin_of, singular_values
+from ..results import StepResult
 from .expressions import OUTPUTS
 from .kernel import Bound, CompiledKernel
-from .outcome import QP_TOLERANCE
-from .realizability import graph_cosines, margin_of, singular_values
-from .results import StepResult
 
 #: The packed outputs, in order (each flattened column-major), then the flag.
 PACKED = ("a", "u", "reaction", "compulsion", "residual", "Phi", "a_free", "qp_primal", "qp_dual")

@@ -1,4 +1,4 @@
-"""The sparse step route: the step of :mod:`gausspp.step.expressions` with the sparsity of ``A``, ``J``, ``D`` kept.
+"""The sparse step route: the step of :mod:`.expressions` with the sparsity of ``A``, ``J``, ``D`` kept.
 
 The dense route whitens the reaction space with Cholesky factors ``L_J``, ``L_D`` of ``J A⁻¹ Jᵀ`` and
 ``Dᵀ A⁻¹ D``: robust to a badly conditioned ``A``, but their inverses are dense, so the graph has O(k³)
@@ -15,7 +15,7 @@ Entries casadi proves to vanish are dropped (``ca.sparsify``) before each factor
 sees the true pattern and the graph has as many nodes as the factors have entries: linear in the number of
 bodies for chains and trees (Baraff's observation, here left to casadi's sparse factorizations). The QP
 poses ``min ½ uᵀ H u`` with ``H = Dᵀ A⁻¹ D`` subject to ``S u = φ − J a₀`` with both matrices sparse.
-The outputs are those of :data:`~gausspp.step.expressions.OUTPUTS`, with the same meaning.
+The outputs are those of :data:`~gausspp.step.equality.expressions.OUTPUTS`, with the same meaning.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 
 import casadi as ca
 
-from ..errors import UnknownNameError
+from ...errors import UnknownNameError
 from .expressions import StepExpressions, step_outputs
 
 ROUTES = ("auto", "dense", "sparse")
@@ -153,7 +153,7 @@ def qp_matrices(red: SparseReduced, p: StepExpressions, rows: ca.SX) -> tuple[ca
 def sparse_outputs(
     p: StepExpressions, red: SparseReduced, u: ca.SX, y: ca.SX | None, refine: bool, rows: ca.SX | None = None
 ) -> list[ca.SX]:
-    """The step's :data:`~gausspp.step.expressions.OUTPUTS` from the reaction unknowns ``u`` (and, for a QP, its
+    """The step's :data:`~.expressions.OUTPUTS` from the reaction unknowns ``u`` (and, for a QP, its
     multipliers ``y`` of the rows scaled by ``rows``: the QP residuals describe the solver's own answer)."""
     u_solver = u
     a = red.a0 + red.AinvD @ u

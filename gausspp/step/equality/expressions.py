@@ -200,7 +200,7 @@ def step_outputs(
     primal: ca.SX,
     dual: ca.SX,
 ) -> list[ca.SX]:
-    """The outputs :data:`OUTPUTS` of a step solved by either route (dense or :mod:`~gausspp.step.sparse`)."""
+    """The outputs :data:`OUTPUTS` of a step solved by either route (dense or :mod:`~gausspp.step.equality.sparse`)."""
     R = p.r0 + p.D @ u
     vel = p.v if p.v is not None else ca.SX.zeros(R.numel())
     values = [a, u, R, compulsion, S_norm, p.J @ a - p.phi, p.Phi, pivot, a_free, primal, dual]

@@ -3,9 +3,9 @@
 ``build`` poses the QP from the step's inputs and carries on the numbers the outputs need; the QP is
 solved — a casadi ``conic`` node inside one graph, or a qpsolvers backend from Python — and ``finish``
 forms the step's outputs from its solution without computing the reduction a second time. The dense
-route poses it in whitened reaction space (``min ½‖z‖²`` s.t. ``Ŝ z = r̂``, :mod:`gausspp.step.expressions`),
+route poses it in whitened reaction space (``min ½‖z‖²`` s.t. ``Ŝ z = r̂``, :mod:`gausspp.step.equality.expressions`),
 the sparse route in the reaction unknowns with sparse matrices (``min ½ uᵀ H u`` s.t. ``S u = r``,
-:mod:`gausspp.step.sparse`).
+:mod:`gausspp.step.equality.sparse`).
 """
 
 from __future__ import annotations
@@ -18,10 +18,10 @@ from typing import TypeVar
 import casadi as ca
 import numpy as np
 
+from ..bound import dense_outputs, only_outputs
+from ..qp import QPBackend
 from . import sparse
-from .bound import dense_outputs, only_outputs
 from .expressions import StepExpressions, outputs, reduce, well_conditioned_constant
-from .qp import QPBackend
 
 T = TypeVar("T")
 

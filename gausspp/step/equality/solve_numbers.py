@@ -11,14 +11,14 @@ import functools
 
 import casadi as ca
 
-from . import qp
-from .data import StepProblem
+from .. import qp
+from ..data import StepProblem
+from ..outcome import Where, evaluation_failed, to_result
+from ..protocol import Group
+from ..results import StepResult
+from ..solvers import check_solver
 from .expressions import StepExpressions
 from .kernel import Kernel, build_kernel
-from .outcome import Where, evaluation_failed, to_result
-from .protocol import Group
-from .results import StepResult
-from .solvers import check_solver
 
 __all__ = ["StepProblem", "solve"]
 

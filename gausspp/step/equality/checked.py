@@ -14,19 +14,19 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..disk_cache import cached_function
-from ..errors import GaussppError, InputError, QPSolveError, RealizabilityError
-from ..workspace import workspace
-from . import qp
+from ...disk_cache import cached_function
+from ...errors import GaussppError, InputError, QPSolveError, RealizabilityError
+from ...workspace import workspace
+from .. import qp
+from ..data import NO_STAB, StepProblem, evaluate
+from ..general import general_step
+from ..general.general_step import solve_at
+from ..outcome import Where, evaluation_failed, to_result, warn_small_margin
+from ..protocol import StepModel
+from ..results import StepResult
+from ..solvers import SOLVERS, check_solver  # noqa: F401  (SOLVERS: the names model.py reads from here)
 from .checked_call import CheckedCall
-from .data import NO_STAB, StepProblem, evaluate
-from .general import general_step
-from .general.general_step import solve_at
 from .kernel import CompiledKernel, Kernel, build_kernel
-from .outcome import Where, evaluation_failed, to_result, warn_small_margin
-from .protocol import StepModel
-from .results import StepResult
-from .solvers import SOLVERS, check_solver  # noqa: F401  (SOLVERS: the names model.py reads from here)
 
 DIRECT_NEEDS_INDEPENDENT_ROWS = (
     " (solver='direct' needs independent rows; solver='qp' returns the unique acceleration "
@@ -68,7 +68,7 @@ def kernel_for(model: StepModel, solver: str, backend: str | qp.QPBackend | None
 
 
 def checked_call(model: StepModel, solver: str, backend: object, refine: bool) -> CheckedCall | None:
-    """The hot path of ``model.step`` for ``solver`` (:mod:`gausspp.step.checked_call`), built on first use and
+    """The hot path of ``model.step`` for ``solver`` (:mod:`gausspp.step.equality.checked_call`), built on first use and
     kept; ``None`` where only the full step applies (contacts, bounds, a QP solved from Python, an unknown
     solver or a backend given as an object — the full step then also reports any error)."""
     if model.contacts or model.bounded or solver not in SOLVERS or not (backend is None or type(backend) is str):
@@ -113,7 +113,7 @@ def general_hot(model: StepModel, t: Any, q: Any, v: Any, lam: Any, solver: str,
         t = float(t)
     except (TypeError, ValueError):
         return None
-    fast = general_step.compiled_outputs(model, t, q, v, lam, backend, NO_STAB)  # type: ignore[arg-type]
+    fast = general_step.compiled_outputs(model, t, q, v, lam, backend, stab=NO_STAB)  # type: ignore[arg-type]
     return None if fast is None else general_step.result_of(model, t, *fast)
 
 
