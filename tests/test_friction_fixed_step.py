@@ -209,3 +209,69 @@ def test_a_failure_midway_keeps_the_steps_computed() -> None:
     assert np.all(np.isfinite(run.q)) and np.all(np.isfinite(run.energy))
     kept = gp.simulate_friction(mech, contacts, [0.0, 0.0], [1.0, 0.0], 2.0, step=1e-3, throw=False)
     assert kept.status == "failed" and np.array_equal(kept.t, run.t)
+
+
+# -- found by review: a slip that turns, events at t_end, recording after a failure ------------------------------------
+def test_a_slip_that_turns_by_ninety_degrees_is_a_new_phase_not_a_stop_and_stays_fourth_order() -> None:
+    """A box sliding and spinning on four corners: a corner's slip turns past 90° from its phase's first direction
+    while it still slips. Both lanes log it as ``"turns"`` (not a stop) and slide on along the new direction, and the
+    fixed steps converge at fourth order to the adaptive run through it (the direction is the slip's own within 120°
+    of the phase's first: a flipped one made the state after the turn first-order, 2.2e-3 off at h = 1e-3)."""
+    mech, contacts = spatial_box(0.4)
+    v0 = [1.0, 0.0, 0.0, 0.0, 0.0, 12.0]
+    ref = gp.simulate_friction(mech, contacts, BOX_Q0, v0, 0.3, rtol=1e-12, atol=1e-14)
+    turns = [ev for ev in ref.events if ev["kind"] == "turns"]
+    assert turns and all(m == "slide" for m in turns[0]["modes"])
+    from gausspp.friction.kinematics import ContactKinematics
+
+    i = int(np.flatnonzero(ref.t == turns[0]["t"])[0])
+    slip = ContactKinematics(mech, contacts)(ref.q[i], ref.v[i]).s[list(ref.contact_names).index(turns[0]["contact"])]
+    assert np.linalg.norm(slip) > 0.1  # control: it turned, it did not stop (measured 0.47 m/s)
+    errors = []
+    for h in (1e-3, 5e-4):
+        run = gp.simulate_friction(mech, contacts, BOX_Q0, v0, 0.3, step=h)
+        assert [ev["kind"] for ev in run.events] == [ev["kind"] for ev in ref.events]
+        errors.append(np.abs(run.v[-1] - ref.v[-1]).max())
+    assert errors[0] <= 1e-8 and 10 < errors[0] / errors[1] < 25, errors  # measured 6.9e-10, ratio 16
+
+
+def test_an_event_within_round_off_past_t_end_ends_the_run_at_t_end() -> None:
+    """The last step of 1e-3 ends 1e-13 past ``t_end`` (labelled ``t_end``) and the stop falls between: the run ends at
+    ``t_end`` without the event, as the adaptive lane does (it raised scipy's ValueError before)."""
+    mu, h = 0.4, 1e-3
+    mech, contacts = incline(0.0, mu)
+    t_end, stop = 0.2 - 1e-13, 0.2 - 0.5e-13
+    run = gp.simulate_friction(mech, contacts, [0.0, 0.0], [mu * G * stop, 0.0], t_end, step=h)
+    ref = gp.simulate_friction(mech, contacts, [0.0, 0.0], [mu * G * stop, 0.0], t_end)
+    assert run.success and run.t[-1] == t_end and run.events == ref.events == []
+
+
+def test_an_event_at_t_end_ends_the_run_with_one_sample_there() -> None:
+    mu, h = 0.4, 1e-3
+    mech, contacts = incline(0.0, mu)
+    t_end = 39 * h
+    run = gp.simulate_friction(mech, contacts, [0.0, 0.0], [mu * G * t_end, 0.0], t_end, step=h)
+    assert [ev["kind"] for ev in run.events] == ["stops slipping"] and (run.t == t_end).sum() == 1
+
+
+def test_a_failure_keeps_only_the_recorded_times() -> None:
+    potential = lambda q, t: G * q[1] + ca.sqrt(1 - q[0])  # noqa: E731
+    mech = gp.Lagrangian(2, T=lambda q, v, t: 0.5 * (v[0] ** 2 + v[1] ** 2), V=potential)
+    contacts = [gp.FrictionContact(lambda q: q[1], lambda q, v: v[0], 0.0, name="floor")]
+    grid = np.linspace(0.0, 2.0, 201)
+    run = gp.simulate_friction(mech, contacts, [0.0, 0.0], [1.0, 0.0], 2.0, step=3.3e-3, record=grid, throw=False)
+    assert run.status == "failed" and len(run.t) > 10 and np.isin(run.t, grid).all()
+    assert np.array_equal(run.t, grid[: len(run.t)])  # every requested time before the failure, in order
+
+
+def test_the_adaptive_lane_names_a_non_finite_force_and_keeps_the_phase_start() -> None:
+    """The same scene in the adaptive lane: scipy keeps no partial phase, so the run keeps the phase's start and says
+    where the forces stopped being finite (it said "the contact rows became dependent" before)."""
+    potential = lambda q, t: G * q[1] + ca.sqrt(1 - q[0])  # noqa: E731
+    mech = gp.Lagrangian(2, T=lambda q, v, t: 0.5 * (v[0] ** 2 + v[1] ** 2), V=potential)
+    contacts = [gp.FrictionContact(lambda q: q[1], lambda q, v: v[0], 0.0, name="floor")]
+    run = gp.simulate_friction(mech, contacts, [0.0, 0.0], [1.0, 0.0], 2.0, throw=False)
+    assert isinstance(run.failure, gp.NonFiniteError) and run.t.tolist() == [0.0]
+    t_fail = float(run.message.split("t=")[1].split()[0])
+    fixed = gp.simulate_friction(mech, contacts, [0.0, 0.0], [1.0, 0.0], 2.0, step=1e-3, throw=False)
+    assert abs(t_fail - fixed.t[-1]) <= 2e-3  # where the fixed steps stopped too

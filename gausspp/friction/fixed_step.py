@@ -84,14 +84,14 @@ def run_phase(
     keep(np.array([t]), y[:, None], out0)
     before = graph.split(out0)[3].ravel()
     while True:
-        ts, Y, out, jump = _advance(step, chunk, y, d, t, t_end, h)
+        ts, lengths, Y, out, jump = _advance(step, chunk, y, d, t, t_end, h)
         bad = ~(np.isfinite(Y).all(axis=0) & np.isfinite(out).all(axis=0)) | ~(jump[0] <= MAX_JUMP)
         values = graph.split(out)[3]
         fire = falls(np.column_stack([before, values[:, :-1]]), values).any(axis=0)
         first = int(np.argmax(fire)) if fire.any() else ts.size
         if bad[:first].any():
             j = int(np.argmax(bad))
-            keep(ts[:j], Y[:, :j], out[:, :j])
+            samples.steps(np.concatenate([[t], ts[:-1]])[:j], ts[:j], y, Y, out)  # what the run asked to keep
             _refuse(ts[j], h, names, Y[:, j], out[:, j], float(jump[0, j]))
         starts = np.concatenate([[t], ts[:-1]])
         samples.steps(starts[:first], ts[:first], y, Y, out)
@@ -102,14 +102,17 @@ def run_phase(
             continue
         t0, y0 = float(starts[first]), (Y[:, first - 1] if first else y).copy()
         start_values = before if first == 0 else values[:, first - 1]
-        h_star, fired = _first_event(step, graph, d, y0, float(ts[first] - t0), start_values, values[:, first])
+        h_star, fired = _first_event(step, graph, d, y0, float(lengths[first]), start_values, values[:, first])
+        if t0 + h_star > t_end + 4 * np.finfo(float).eps * abs(t_end):  # past t_end (a last step within round-off
+            h_star, fired = t_end - t0, []  # of it, labelled t_end): the run ends there, no event
         sample(t0, y0, t0 + h_star)
         y1, out1, jump1 = step(y0, d, h_star)
         y_star = y1.full().ravel()
         if not (np.isfinite(y_star).all() and np.isfinite(out1.full()).all() and float(jump1) <= MAX_JUMP):
             _refuse(t0 + h_star, h, names, y_star, out1.full().ravel(), float(jump1))
-        keep(np.array([t0 + h_star]), y_star[:, None], out1.full())
-        return t0 + h_star, y_star, fired
+        t_star = t_end if not fired else min(t0 + h_star, t_end)
+        keep(np.array([t_star]), y_star[:, None], out1.full())
+        return t_star, y_star, fired
 
 
 class _Samples:
@@ -147,19 +150,20 @@ class _Samples:
 
 def _advance(
     step: Any, chunk: Any, y: np.ndarray, d: np.ndarray, t: float, t_end: float, h: float
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The next steps from ``(t, y)``: a chunk of steps of ``h`` (as many as fit before ``t_end``), or the last,
-    shorter one; their end times, states, outputs and jumps (one column per step)."""
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The next steps from ``(t, y)``: a chunk of steps of ``h`` (as many as fit before ``t_end``; a last one within
+    round-off of ``t_end`` is labelled ``t_end``), or the last, shorter one; their end times, lengths, states,
+    outputs and jumps (one column per step)."""
     n_full = int(np.floor((t_end - t) / h * (1.0 + 1e-12)))
     if n_full < 1:
         y1, out1, jump1 = step(y, d, t_end - t)
-        return np.array([t_end]), y1.full(), out1.full(), jump1.full()
+        return np.array([t_end]), np.array([t_end - t]), y1.full(), out1.full(), jump1.full()
     m = min(CHUNK, n_full)
     Y, out, jump = (x.full()[:, :m] for x in chunk(y, d, h))
     ts = t + h * np.arange(1, m + 1)
     if m == n_full and t_end - ts[-1] <= 1e-12 * (1.0 + abs(t_end)):
         ts[-1] = t_end
-    return ts, Y, out, jump
+    return ts, np.full(m, h), Y, out, jump
 
 
 def _first_event(
@@ -174,7 +178,8 @@ def _first_event(
     hit = np.flatnonzero(falls(before, after))
     roots = {int(k): _root(lambda hh, k=k: value(hh, k), h_step) for k in hit}
     h_star = min(roots.values())
-    return h_star, [graph.events[k] for k, r in roots.items() if r <= h_star + 1e-12 * (1.0 + h_step)]
+    together = 1e-9 * h_step  # roots this close are one instant (symmetric corners), whatever the step's length
+    return h_star, [graph.events[k] for k, r in roots.items() if r <= h_star + together]
 
 
 def _refuse(t: float, h: float, names: tuple[str, ...], y: np.ndarray, out: np.ndarray, jump: float) -> None:
@@ -195,6 +200,6 @@ def _root(f: Any, h: float) -> float:
     """The first zero of ``f`` on ``[0, h]`` where ``f(0) ≥ 0 > f(h)`` (or ``f(0) > 0 ≥ f(h)``)."""
     if f(0.0) <= 0.0:
         return 0.0
-    if f(h) == 0.0:
+    if f(h) >= 0.0:  # the end value that showed the fall, evaluated again, does not: the zero is at the end
         return h
     return float(brentq(f, 0.0, h, xtol=1e-16, rtol=4 * np.finfo(float).eps, maxiter=200))

@@ -1,12 +1,17 @@
 """Event-driven simulation of a mechanism with frictional contacts (docs/friction.md).
 
 Between events the contact modes are fixed (:mod:`.modes`) and scipy's DOP853 (Radau while a two-component slip
-slides: :meth:`_Runner.method`) integrates ``q̇ = K(q, v)``,
-``v̇ = q̈``. Its events end a phase where a mode stops holding: an open contact's gap closes, a closed one's
-normal force ``N`` falls to zero (lift-off), a sliding one's slip ``s`` reaches zero (it stops: it sticks or
-slides back), a sticking one's friction reaches the cone ``|F| = μ_s N`` (it starts to slide). At each event the
-modes are chosen anew; a gap closing with approaching speed is an impact first (Newton's restitution on the
-normal velocity, Coulomb's law on the impulses: :func:`impact`).
+slides: :meth:`_Runner.method`) integrates ``q̇ = K(q, v)``, ``v̇ = q̈`` — or, with ``step=h``, compiled RK4 steps
+(:mod:`.fixed_step`). Its events end a phase where a mode stops holding:
+
+* an open contact's gap closes;
+* a closed one's normal force ``N`` falls to zero (lift-off);
+* a sliding one's slip ``s`` reaches zero (it stops: it sticks or slides back) — or, with two components, turns
+  90° from the phase's first direction (``"turns"``: the next phase takes the new one);
+* a sticking one's friction reaches the cone ``|F| = μ_s N`` (it starts to slide).
+
+At each event the modes are chosen anew; a gap closing with approaching speed is an impact first (Newton's
+restitution on the normal velocity, Coulomb's law on the impulses: :func:`impact`).
 """
 
 from __future__ import annotations
@@ -17,7 +22,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..errors import GaussppError, InitialDataError, InputError, IntegrationError, ShapeError
+from ..errors import GaussppError, InitialDataError, InputError, IntegrationError, NonFiniteError, ShapeError
 from ..model.mechanism import Mechanism
 from ..model.model import Model
 from ..step.outcome import not_positive_definite
@@ -27,7 +32,7 @@ from .contact import FrictionContact
 from .fixed_step import Phases, run_phase
 from .kinematics import ContactKinematics, ContactState
 from .modes import OPEN, SLIDE, STICK, Modes, Solution, check_painleve, choose, solve
-from .phase_graph import SLIP_FLOOR
+from .phase_graph import SLIP_FLOOR, TURN
 from .run import FrictionRun, Record
 
 #: Relative tolerance of "on the contact" and "not slipping" at an event, and of the laws' inequalities.
@@ -57,8 +62,8 @@ class _Runner:
         for i, kind in enumerate(modes.kinds):
             if kind == SLIDE and st.s[i].size > 1:
                 size = np.linalg.norm(st.s[i])
-                if size > SLIP_FLOOR * (1.0 + np.abs(v).max()):  # continued past the phase's end, not flipped
-                    dirs[i] = (1.0 if modes.dirs[i] @ st.s[i] >= 0 else -1.0) * st.s[i] / size
+                if size > SLIP_FLOOR * (1.0 + np.abs(v).max()):  # continued past a stop (phase_graph.TURN)
+                    dirs[i] = (1.0 if modes.dirs[i] @ st.s[i] >= -TURN * size else -1.0) * st.s[i] / size
         try:
             x0 = np.linalg.solve(st.A, st.f)
         except np.linalg.LinAlgError:  # a configuration where the mass matrix is singular, between samples
@@ -69,9 +74,14 @@ class _Runner:
         return sol
 
     def rhs(self, modes: Modes) -> Any:
-        def f(_t: float, y: np.ndarray) -> np.ndarray:
+        def f(t: float, y: np.ndarray) -> np.ndarray:
             q, v = self.split(y)
             st = self.kin(q, v)
+            if not (np.isfinite(y).all() and np.isfinite(st.A).all() and np.isfinite(st.f).all()):
+                raise NonFiniteError(
+                    f"the state or the forces became non-finite at t={t:.6g} (modes {modes.names()}); check the "
+                    "mechanism's formulas there"
+                )
             return np.concatenate([np.array(self.qdot(q, v)).ravel(), self.accel(st, modes, v).x])
 
         return f
@@ -267,12 +277,17 @@ def _runner(system: Mechanism | Model, contacts: list[FrictionContact]) -> _Runn
 def _next_modes(
     runner: _Runner, t: float, y: np.ndarray, fired: list[tuple[str, int]], max_events: int, events: list
 ) -> tuple[Modes, np.ndarray]:
-    """The modes after the events ``fired`` at ``(t, y)`` (and the velocity after an impact), the events logged."""
+    """The modes after the events ``fired`` at ``(t, y)`` (and the velocity after an impact), the events logged. A
+    two-component slip whose ``d·s`` fell through zero while it still slips has turned by 90°, not stopped: its
+    event is logged as ``"turns"`` (the next phase slides along its new direction)."""
     if len(events) >= max_events:
         raise IntegrationError(f"more than max_events={max_events} contact events by t={t:.6g}")
     q, v = runner.split(y)
+    s, speed = runner.kin(q, v).s, 1.0 + np.abs(v).max(initial=0.0)
     modes, v, _ = runner.modes_at(t, q, v, tuple(fired))
     for kind, i in fired:
+        if kind == "stops slipping" and s[i].size > 1 and np.linalg.norm(s[i]) > CONTACT_TOL * speed:
+            kind = "turns"
         events.append({"t": t, "kind": kind, "contact": runner.names[i], "modes": modes.names()})
     return modes, np.concatenate([q, v])
 
@@ -291,6 +306,8 @@ def _fixed_step(
         if not fired:
             return
         modes, y = _next_modes(runner, t, y, fired, opts.max_events, events)
+        if t >= opts.t_end:  # an event at t_end ends the run (no phase of length zero after it)
+            return
 
 
 def _adaptive(
@@ -304,6 +321,7 @@ def _adaptive(
     y = np.concatenate([q, v])
     while t < opts.t_end:
         check_painleve(runner.kin(*runner.split(y)), runner.contacts, modes, t)
+        _keep(runner, rec, modes, [t], [y])  # the phase's start, kept if the phase fails
         watched = runner.events(modes)
         sol = solve_ivp(
             runner.rhs(modes),
@@ -315,8 +333,7 @@ def _adaptive(
             events=watched,
             t_eval=None if times is None else np.append(times[(times > t) & (times < opts.t_end)], opts.t_end),
         )
-        if sol.status == -1:
-            raise IntegrationError(f"the integrator failed at t={sol.t[-1]:.6g}: {sol.message}")
+        failed = sol.status == -1
         ends = [(te[0], ye[0]) for te, ye in zip(sol.t_events, sol.y_events, strict=True) if te.size]
         if times is not None:  # the phase's start, the sampled times, then the event's state
             seg_t, seg_y = [t, *sol.t], [y, *sol.y.T]
@@ -324,13 +341,20 @@ def _adaptive(
                 seg_t.append(ends[0][0]), seg_y.append(ends[0][1])
         else:
             seg_t, seg_y = list(sol.t), list(sol.y.T)
-        names = modes.names()
-        for ti, yi in zip(seg_t, seg_y, strict=True):
-            st = runner.kin.checked(*runner.split(yi), ti, runner.names)
-            acc = runner.accel(st, modes, runner.split(yi)[1])
-            rec.add(ti, yi, names, acc.N, np.concatenate(acc.F), st.energy)
+        _keep(runner, rec, modes, seg_t[1:], seg_y[1:])
         t, y = float(seg_t[-1]), np.asarray(seg_y[-1])
+        if failed:  # what it computed is recorded above
+            raise IntegrationError(f"the integrator failed at t={sol.t[-1]:.6g}: {sol.message}")
         if sol.status == 0:
             return
         fired = [ev.what for ev, te in zip(watched, sol.t_events, strict=True) if te.size]
         modes, y = _next_modes(runner, t, y, fired, opts.max_events, events)
+
+
+def _keep(runner: _Runner, rec: Record, modes: Modes, ts: list, ys: list) -> None:
+    """Record the states ``ys`` at ``ts`` of a phase under ``modes``, with their forces and energy."""
+    names = modes.names()
+    for ti, yi in zip(ts, ys, strict=True):
+        st = runner.kin.checked(*runner.split(yi), ti, runner.names)
+        acc = runner.accel(st, modes, runner.split(yi)[1])
+        rec.add(ti, yi, names, acc.N, np.concatenate(acc.F), st.energy)

@@ -33,6 +33,12 @@ from .modes import OPEN, SLIDE, STICK
 CHUNK = 256
 #: A two-component slip below this (relative to the velocities' size) slides along the phase's first direction.
 SLIP_FLOOR = 1e-7
+#: A two-component slip opposite its phase's first direction ``d`` (``d·s < −TURN ‖s‖``: more than 120° from it)
+#: has passed through zero, and its direction is continued (``−s/‖s‖``); within 120° it is the slip's own. A phase
+#: ends where ``d·s`` falls through zero: the slip stops (and its direction is continued in the stages past the
+#: stop), or it has turned by 90° (and the next phase takes its new direction), so no stage of a step meets the
+#: 120° line except one past a stop.
+TURN = 0.5
 #: Relative rank tolerance of the pivoted QR that keeps the independent rows.
 RANK_TOL = 1e-10
 
@@ -51,7 +57,7 @@ def _forces(
         di = d[part]
         if kind == SLIDE and kin.dims[i] > 1:  # against the slip's current direction, once it has one
             size = ca.norm_2(s[part])
-            along = ca.if_else(ca.dot(di, s[part]) >= 0, 1, -1) * s[part] / ca.fmax(size, 1e-300)
+            along = ca.if_else(ca.dot(di, s[part]) >= -TURN * size, 1, -1) * s[part] / ca.fmax(size, 1e-300)
             di = ca.if_else(size > SLIP_FLOOR * speed, along, di)
         dirs.append(di)
         if kind == OPEN:
