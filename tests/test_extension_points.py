@@ -190,3 +190,19 @@ def test_a_realization_registered_as_one_entry_steps_simulates_and_verifies(monk
         [gp.Holonomic(lambda q, t: q[0] ** 2 + q[1] ** 2 - 1.0, realization=R.Force(M=lambda q, v, t: [[1.0, 0.0]]))],
     )
     assert not gp.verify(along_x, traj).is_motion  # control: not a motion of a force along x
+
+
+def test_a_wrong_registration_is_refused_by_name(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A registry entry that does not make what it should is a project error naming it, not a traceback."""
+    from gausspp.model import realizations as R
+    from gausspp.step import qp
+
+    monkeypatch.setitem(qp.REGISTERED, "toy:wrong", lambda: "not a backend")
+    with pytest.raises(gp.InputError, match="toy:wrong"):
+        qp.get("toy:wrong")
+    monkeypatch.setitem(R.REALIZATIONS, "wrong", lambda: 3)
+    with pytest.raises(gp.InputError, match="'wrong'"):
+        gp.Holonomic(lambda q, t: q[0], realization="wrong")
+    monkeypatch.setitem(gp.scenes.SCENES, "wrong", 5)
+    with pytest.raises(gp.InputError, match="'wrong'"):
+        gp.scenes.get("wrong")

@@ -275,3 +275,17 @@ def test_the_adaptive_lane_names_a_non_finite_force_and_keeps_the_phase_start() 
     t_fail = float(run.message.split("t=")[1].split()[0])
     fixed = gp.simulate_friction(mech, contacts, [0.0, 0.0], [1.0, 0.0], 2.0, step=1e-3, throw=False)
     assert abs(t_fail - fixed.t[-1]) <= 2e-3  # where the fixed steps stopped too
+
+
+def test_a_mass_matrix_that_stops_being_positive_definite_is_refused_at_the_step_that_meets_it() -> None:
+    """``A = diag(1, 1 − x)`` of a block sliding at 2 m/s (μ = 0.2, reaching x = 1 at t ≈ 0.513): the fixed steps stop
+    with the step's own NotPositiveDefiniteError within a step of that time and keep the steps before; a mechanism
+    that knows no energy (NaN) runs as any other until then."""
+    mech = gp.MassMatrix(n=2, A=lambda q, t: [[1.0, 0.0], [0.0, 1.0 - q[0]]], f=lambda q, v, t: [0.0, -1.0])
+    contacts = [gp.FrictionContact(lambda q: q[1], lambda q, v: v[0], 0.2, name="floor")]
+    ok = gp.simulate_friction(mech, contacts, [0.0, 0.0], [2.0, 0.0], 0.5, step=1e-3)
+    assert ok.success and np.isnan(ok.energy).all() and abs(ok.q[-1, 0] - (2 * 0.5 - 0.1 * 0.25)) <= 1e-12
+    run = gp.simulate_friction(mech, contacts, [0.0, 0.0], [2.0, 0.0], 1.0, step=1e-3, throw=False)
+    assert isinstance(run.failure, gp.NotPositiveDefiniteError) and run.q[:, 0].max() < 1.0
+    crossing = (2 - np.sqrt(4 - 4 * 0.1)) / 0.2  # x = 2t − 0.1t² = 1
+    assert crossing - 2e-3 <= run.t[-1] < crossing

@@ -85,14 +85,14 @@ def run_phase(
     before = graph.split(out0)[3].ravel()
     while True:
         ts, lengths, Y, out, jump = _advance(step, chunk, y, d, t, t_end, h)
-        bad = ~(np.isfinite(Y).all(axis=0) & np.isfinite(out).all(axis=0)) | ~(jump[0] <= MAX_JUMP)
+        bad = ~graph.usable(Y, out) | ~(jump[0] <= MAX_JUMP)
         values = graph.split(out)[3]
         fire = falls(np.column_stack([before, values[:, :-1]]), values).any(axis=0)
         first = int(np.argmax(fire)) if fire.any() else ts.size
         if bad[:first].any():
             j = int(np.argmax(bad))
             samples.steps(np.concatenate([[t], ts[:-1]])[:j], ts[:j], y, Y, out)  # what the run asked to keep
-            _refuse(ts[j], h, names, Y[:, j], out[:, j], float(jump[0, j]))
+            _refuse(runner, ts[j], h, names, Y[:, j], usable=bool(graph.usable(Y, out)[j]))
         starts = np.concatenate([[t], ts[:-1]])
         samples.steps(starts[:first], ts[:first], y, Y, out)
         if first == ts.size:
@@ -108,8 +108,8 @@ def run_phase(
         sample(t0, y0, t0 + h_star)
         y1, out1, jump1 = step(y0, d, h_star)
         y_star = y1.full().ravel()
-        if not (np.isfinite(y_star).all() and np.isfinite(out1.full()).all() and float(jump1) <= MAX_JUMP):
-            _refuse(t0 + h_star, h, names, y_star, out1.full().ravel(), float(jump1))
+        if not (graph.usable(y_star[:, None], out1.full())[0] and float(jump1) <= MAX_JUMP):
+            _refuse(runner, t0 + h_star, h, names, y_star, usable=bool(graph.usable(y_star[:, None], out1.full())[0]))
         t_star = t_end if not fired else min(t0 + h_star, t_end)
         keep(np.array([t_star]), y_star[:, None], out1.full())
         return t_star, y_star, fired
@@ -182,17 +182,21 @@ def _first_event(
     return h_star, [graph.events[k] for k, r in roots.items() if r <= h_star + together]
 
 
-def _refuse(t: float, h: float, names: tuple[str, ...], y: np.ndarray, out: np.ndarray, jump: float) -> None:
-    """Stop the run at the step ending at ``t``: non-finite numbers, or a step too long for its phase."""
-    if not (np.isfinite(y).all() and np.isfinite(out).all()):
+def _refuse(runner: Any, t: float, h: float, names: tuple[str, ...], y: np.ndarray, *, usable: bool) -> None:
+    """Stop the run at the step ending at ``t`` in ``y``: what the contact state's own checks refuse there (a mass
+    matrix not positive definite, a quantity not finite), other non-finite numbers, or — its numbers ``usable`` — a
+    step too long for its phase."""
+    if np.isfinite(y).all():
+        runner.kin.checked(y[: runner.nq], y[runner.nq :], t, runner.names)
+    if not usable:
         raise NonFiniteError(
             f"the state or the contact forces became non-finite at t={t:.6g} (modes {names}); check the mechanism's "
             "formulas there, or take a shorter step"
         )
     raise IntegrationError(
-        f"the step h={h:g} is too long for the phase at t={t:.6g} (modes {names}): the rate changes by {jump:.3g} of "
-        f"the state's size within one step (more than {MAX_JUMP:g}: a stiff contact force, or a fast event); take a "
-        "shorter step, or step=None (adaptive)"
+        f"the step h={h:g} is too long for the phase at t={t:.6g} (modes {names}): its rate changes by more than "
+        f"{MAX_JUMP:g} of the state's size within one step (a stiff contact force, or a fast event); take a shorter "
+        "step, or step=None (adaptive)"
     )
 
 

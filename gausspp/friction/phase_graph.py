@@ -102,6 +102,18 @@ def kept_rows(M: np.ndarray) -> tuple[int, ...]:
     return tuple(sorted(int(p) for p in perm[:rank]))
 
 
+def _least_pivot(A: ca.SX) -> ca.SX:
+    """The least pivot of ``A``'s elimination without pivoting, relative to its largest diagonal entry: positive
+    exactly where the symmetric ``A`` is positive definite (Sylvester's criterion)."""
+    n, scale = A.size1(), ca.mmax(ca.fabs(ca.diag(A)))
+    pivots, rest = [], A
+    for k in range(n):
+        pivots.append(rest[0, 0])
+        if k + 1 < n:
+            rest = rest[1:, 1:] - rest[1:, 0] @ rest[0, 1:] / rest[0, 0]
+    return ca.mmin(ca.vertcat(*pivots)) / scale if n else ca.SX(1)
+
+
 def _rk4(rate: ca.Function, d: ca.SX, nq: int, nv: int, normalize: Any) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
     """One classical RK4 step of ``ẏ = rate(q, v, d)`` from the symbol ``y`` by the symbol ``h``: ``(y, h, y⁺, jump)``
     with ``q`` renormalized (unit quaternions) and ``jump`` how much the rate changes across the step, relative to
@@ -168,7 +180,7 @@ class PhaseGraph:
             if kind == STICK:
                 events.append(contacts[i].mu_static * N[i] - ca.norm_2(F[i]))
                 self.events.append(("starts to slip", i))
-        out = ca.vertcat(*N, *F, S["energy"], *events)
+        out = ca.vertcat(*N, *F, S["energy"], _least_pivot(ca.SX(S["A"])), *events)
         self.n_contacts, self.n_friction = kin.c, nd
         rate = ca.Function("rate", [q, v, d], [ca.vertcat(S["qdot"], qdd)])
         report = ca.Function("report", [q, v, d], [out])
@@ -189,4 +201,11 @@ class PhaseGraph:
     def split(self, out: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``out`` (rows, one column per sample) as normal forces, friction forces, energy, events' values."""
         c, nd = self.n_contacts, self.n_friction
-        return out[:c], out[c : c + nd], out[c + nd], out[c + nd + 1 :]
+        return out[:c], out[c : c + nd], out[c + nd], out[c + nd + 2 :]
+
+    def usable(self, Y: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """Per sample: the state, forces and events' values finite and the mass matrix positive definite (its least
+        pivot positive); the energy may be NaN (a mechanism that does not know it)."""
+        c, nd = self.n_contacts, self.n_friction
+        finite = np.isfinite(Y).all(axis=0) & np.isfinite(np.delete(out, [c + nd, c + nd + 1], axis=0)).all(axis=0)
+        return finite & (out[c + nd + 1] > 0)

@@ -58,18 +58,18 @@ class Record:
         self.modes.extend([modes] * k)
 
     def run(self, names: tuple[str, ...], events: list[dict[str, Any]]) -> FrictionRun:
-        def join(parts: list[np.ndarray], width: int) -> np.ndarray:
-            return np.concatenate(parts) if parts else np.zeros((0, width))
+        def join(parts: list[np.ndarray], *shape: int) -> np.ndarray:
+            return np.concatenate(parts) if parts else np.zeros((0, *shape))
 
         Y = join(self.y, self.nq + self.nv)
         return FrictionRun(
-            t=join(self.t, 0).ravel() if self.t else np.zeros(0),
+            t=join(self.t),
             q=Y[:, : self.nq],
             v=Y[:, self.nq :],
             modes=self.modes,
             N=join(self.N, self.c),
             F=join(self.F, self.nd),
-            energy=join(self.energy, 0).ravel() if self.energy else np.zeros(0),
+            energy=join(self.energy),
             contact_names=names,
             events=events,
         )

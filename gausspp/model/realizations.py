@@ -360,7 +360,10 @@ def as_realization(value: Realization | str | None) -> Realization:
         return value
     if isinstance(value, str):
         if value in REALIZATIONS:
-            return REALIZATIONS[value]()
+            made = REALIZATIONS[value]()
+            if not isinstance(made, Realization):
+                raise InputError(f"realization {value!r} is registered to make {made!r}, not a Realization")
+            return made
         raise UnknownNameError(
             f"realization={value!r} is unknown; by name only {sorted(REALIZATIONS)} can be given, "
             "the others need their data: Force(M=...), Inertial(N=..., lam0=...), Mixed(N=..., M=..., law=...)"

@@ -68,6 +68,8 @@ def _builder(name: str) -> Callable[..., Scene]:
     where = SCENES[name]
     if callable(where):
         return where
+    if not isinstance(where, str):
+        raise InputError(f"scene {name!r} is registered as {where!r}: give a module of gausspp.scenes or a builder")
     module = importlib.import_module(f"{__name__}.{where}")
     builder: Callable[..., Scene] = getattr(module, "build_" + name.replace("-", "_"), None) or module.build
     return builder
