@@ -247,11 +247,14 @@ def test_an_event_within_round_off_past_t_end_ends_the_run_at_t_end() -> None:
 
 
 def test_an_event_at_t_end_ends_the_run_with_one_sample_there() -> None:
+    """The box stops at ``t_end`` itself, on the grid: whether round-off puts the stop just before or just after the
+    last step's end, the run ends with one sample at ``t_end`` (no phase of length zero after an event there)."""
     mu, h = 0.4, 1e-3
     mech, contacts = incline(0.0, mu)
     t_end = 39 * h
     run = gp.simulate_friction(mech, contacts, [0.0, 0.0], [mu * G * t_end, 0.0], t_end, step=h)
-    assert [ev["kind"] for ev in run.events] == ["stops slipping"] and (run.t == t_end).sum() == 1
+    assert run.success and (run.t == t_end).sum() == 1 and len(run.events) <= 1
+    assert all(abs(ev["t"] - t_end) <= 1e-12 for ev in run.events)
 
 
 def test_a_failure_keeps_only_the_recorded_times() -> None:
