@@ -51,6 +51,7 @@ if TYPE_CHECKING:  # what the names below are, for type checkers and editors
     from .model.mechanism import Lagrangian, MassMatrix, Mechanism, RigidBody
     from .model.model import Model
     from .model.realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
+    from .model.scales import Scales
     from .model.urdf import frame_acceleration_bias, frame_jacobian, frame_position, frame_rotation, from_urdf
     from .multibody import Multibody
     from .multibody.mjcf import MJCFMachine, from_mjcf
@@ -99,6 +100,7 @@ _NAMES = {
     "Mechanism": "gausspp.model.mechanism",
     "RigidBody": "gausspp.model.mechanism",
     "Model": "gausspp.model.model",
+    "Scales": "gausspp.model.scales",
     "Force": "gausspp.model.realizations",
     "Ideal": "gausspp.model.realizations",
     "Inertial": "gausspp.model.realizations",
@@ -165,6 +167,7 @@ __all__ = [
     "MJCFMachine",
     "Mixed",
     "Model",
+    "Scales",
     "Multibody",
     "NonFiniteError",
     "NotAffineError",

@@ -145,8 +145,12 @@ def test_a_stage_that_fails_hands_the_step_to_python_which_names_the_failure(mon
     monkeypatch.setattr(compiled_adaptive, "applies", lambda method, rhs: False)
     plain = gp.simulate(gp.Model(body, list(model.constraints)), [0.0, 0.0], [1.0, 1.0], 2.0, throw=False)
     assert type(plain.failure) is type(traj.failure)
-    assert abs(_failure_time(plain) - _failure_time(traj)) <= 1e-5
     assert plain.t.size == traj.t.size  # the steps' times agree to the error norm's round-off, not bitwise
+    # the same stage of the same step: the failure times agree as the steps do — the error estimate is a difference
+    # of stages, its relative round-off ~1e-4 here (measured: the second step's lengths differ by 5e-5), far below
+    # the 1e-2 of the failing step's length that another stage or another step would make
+    failing_step = _failure_time(traj) - traj.t[-1]
+    assert abs(_failure_time(plain) - _failure_time(traj)) <= 1e-2 * failing_step
 
 
 def test_the_work_integrals_do_not_choose_the_step() -> None:

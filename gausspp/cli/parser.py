@@ -92,7 +92,7 @@ def _simulation_options(p: argparse.ArgumentParser, rtol: float, samples: int) -
         type=_positive(float),
         default=DEFAULT_ATOL,
         metavar="A",
-        help=f"absolute tolerance of adaptive methods (default: {DEFAULT_ATOL:g})",
+        help="absolute tolerance of adaptive methods (default: rtol times each component's own size)",
     )
     p.add_argument(
         "--constraint-tol",

@@ -38,6 +38,7 @@ from ..validation import flag, positive, short
 from .assembly import assemble, assemble_contacts
 from .constraints import Constraint, Unilateral
 from .mechanism import Mechanism
+from .scales import Scales, check_scales
 
 SOLVERS = checked.SOLVERS
 
@@ -71,6 +72,10 @@ class Model:
         Run the compiled lane's step as C (:mod:`gausspp.c_code`): many times faster per step, after a
         compilation of seconds for a large model, kept on disk for the next process. Without a C compiler the
         step stays in casadi's virtual machine.
+    scales : gp.Scales or dict, optional
+        The size of some components' motion where the numbers cannot tell it (``gp.Scales(q=[...], v=[...])``,
+        ``None`` entries derived): every tolerance of a run is measured against scales read from the machine at
+        its start (:mod:`gausspp.simulation.scales`); a declared size replaces the one read.
 
     Attributes
     ----------
@@ -101,6 +106,7 @@ class Model:
         contact_tol: float = 1e-9,
         route: str = "auto",
         codegen: bool = False,
+        scales: Scales | dict[str, Any] | None = None,
     ) -> None:
         if not isinstance(mechanism, Mechanism):
             raise InputError(f"mechanism must be a Lagrangian, RigidBody or MassMatrix, got {type(mechanism).__name__}")
@@ -145,6 +151,8 @@ class Model:
         self.bounded = any(b is not None for b in self.group_bounds)
         self.has_energy = mechanism.energy is not None
         self.has_force_power = mechanism.F_nc is not None
+        #: the sizes the model declares (:class:`~gausspp.Scales`); ``None``: every scale read from the run's start
+        self.scales = check_scales(scales, self.nq, self.nv)
         self._sealed = True
 
     def __setattr__(self, name: str, value: Any) -> None:

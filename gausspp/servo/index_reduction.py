@@ -110,7 +110,7 @@ def simulate_servo(
     *,
     t0: float = 0.0,
     rtol: float = 1e-11,
-    atol: float = 1e-12,
+    atol: Any = 1e-12,
     record: Any = None,
     pole: float = 1.0,
 ) -> ServoTrajectory:
@@ -124,7 +124,9 @@ def simulate_servo(
         A start near the path; it is made consistent with the hidden constraints (and the forces found).
     t_end : float
     rtol, atol : float
-        DOP853's tolerances.
+        DOP853's tolerances; ``atol`` may also be one per component of ``(q, v)`` followed by one for the actuators'
+        chain states (``gp.simulate`` passes ``rtol`` times each component's size:
+        :func:`gausspp.simulation.scales.RunScales.atol`).
     record : array of times, optional
         Where to sample (default: 401 samples).
     pole : float
@@ -151,6 +153,8 @@ def simulate_servo(
         return rhs.res[0].copy()
 
     grid = np.linspace(t, t_end, 401) if record is None else np.asarray(record, float)
+    if np.ndim(atol):  # (q, v) and one value for the chain states
+        atol = np.concatenate([np.asarray(atol, float)[:-1], np.full(z0.size - np.size(atol) + 1, np.asarray(atol)[-1])])
     sol = solve_ivp(f, (t, t_end), z0, method="DOP853", rtol=rtol, atol=atol, t_eval=grid)
     Z = sol.y.T
     samples = ca.Function("samples", [e.t, e.z], [force, outputs(model)])  # z starts with the model's own q, v

@@ -27,7 +27,7 @@ from . import lanes
 from . import methods as _methods
 from .drift import Stabilization, projection_function
 from .inputs import Options
-from .rhs import RightHandSide
+from .rhs import RightHandSide, step_control_atol
 from .samples import Samples, fixed_grid, kept_steps
 
 #: CVODES gives up after this many internal steps (seconds on a small model) instead of stalling.
@@ -252,10 +252,19 @@ def cvodes_run(
         grid = np.append(grid[grid < t_end], t_end)
     else:
         grid = np.unique(np.concatenate([[t0], np.asarray(record, float)]))
-    y, t, s = ca.MX.sym("y", y0.size), ca.MX.sym("t"), ca.MX.sym("stab", 2)
-    dae = {"x": y, "t": t, "p": s, "ode": F(t, y, s)}
+    # CVODES takes one absolute tolerance: each component is integrated in units of its own (z = y / w), so the
+    # error test on z with abstol 1 is the test on y with abstol w (the works: the motion's least tolerance)
+    # (a user's single atol: no units to take, y itself)
+    if np.ndim(atol) == 0:
+        w, abstol = np.ones(y0.size), float(atol)
+    else:
+        w = step_control_atol(atol, y0.size)
+        w[~np.isfinite(w)] = np.min(w[np.isfinite(w)], initial=1.0)
+        w, abstol = np.where(w > 0, w, 1.0), 1.0
+    z, t, s = ca.MX.sym("z", y0.size), ca.MX.sym("t"), ca.MX.sym("stab", 2)
+    dae = {"x": z, "t": t, "p": s, "ode": F(t, z * w, s) / w if np.ndim(atol) else F(t, z, s)}
     settings: dict[str, Any] = {
-        "abstol": atol,
+        "abstol": abstol,
         "reltol": rtol,
         "max_num_steps": MAX_CVODES_STEPS,
         "disable_internal_warnings": True,
@@ -269,7 +278,7 @@ def cvodes_run(
     def run(upto: int) -> tuple[np.ndarray, ca.Function]:
         integrator = ca.integrator("cvodes", "cvodes", dae, t0, grid[1 : upto + 1], settings)
         with stdout_silenced():  # SUNDIALS prints its own failure report
-            return np.array(integrator(x0=y0, p=np.array(stab.stab))["xf"]).T, integrator
+            return np.array(integrator(x0=y0 / w, p=np.array(stab.stab))["xf"]).T * w, integrator
 
     try:
         xf, integrator = run(grid.size - 1)

@@ -20,6 +20,7 @@ import numpy as np
 from ..errors import DriftError
 from ..model.model import Model
 from ..workspace import workspace
+from .scales import RunScales, energy_scale, scales_at_first
 
 #: The balance may be off by this times ``drift_tol`` of the energy scale (default: a tenth of it).
 ENERGY_SHARE = 100.0
@@ -44,26 +45,26 @@ def closes(model: Model) -> bool:
 
 
 def energy_audit(
-    model: Model, t: np.ndarray, y: np.ndarray, energy: np.ndarray, tol: float, n: int
+    model: Model,
+    t: np.ndarray,
+    y: np.ndarray,
+    energy: np.ndarray,
+    tol: float,
+    n: int,
+    scales: RunScales | None = None,
 ) -> tuple[int, DriftError | None]:
     """The samples to keep of the first ``n`` and the failure, if the energy balance of ``(t, y)`` (``y``'s last two
-    columns the works ``W_R, W_F``; ``energy`` recorded beside) leaves ``ENERGY_SHARE·tol`` of the energy scale."""
+    columns the works ``W_R, W_F``; ``energy`` recorded beside) leaves ``ENERGY_SHARE·tol`` of the energy scale
+    reached (at least that of the run's first tenth), above its round-off floor
+    (:func:`~gausspp.simulation.scales.energy_scale`)."""
     if n < 2 or not closes(model):
         return n, None
-    exchange = np.abs(energy[:n] - energy[0])
-    works = np.abs(y[:n, -2] - y[0, -2]), np.abs(y[:n, -1] - y[0, -1])
     balance = (energy[:n] - energy[0]) - (y[:n, -2] - y[0, -2]) - (y[:n, -1] - y[0, -1])
     early = max(1, n // EARLY)  # every sample is judged against at least the scale of the run's first tenth
-    exchanged = _reached(np.nan_to_num(exchange + works[0] + works[1], nan=0.0), early)
-    limit = ENERGY_SHARE * tol
-    if np.all(np.abs(balance) <= limit * exchanged):  # the exchanges alone are scale enough (NaN goes on)
+    off = beyond(model, scales or scales_at_first(model, t, y), t[:n], y[:n], energy[:n], balance, tol, early)
+    if off is None:
         return n, None
-    scale = exchanged + _reached(kinetic_energies(model, t, y, n), early)
-    off = np.flatnonzero(~(np.abs(balance) <= limit * scale))
-    if not off.size:
-        return n, None
-    i = int(off[0])
-    scale_i = float(scale[i])
+    i, scale_i = off
     size = np.abs(y[: i + 1, : model.nq + model.nv])
     what = "diverged" if not size[-1].max() <= DIVERGED * (1.0 + size[0].max()) else "left its energy balance"
     return i + 1, DriftError(
@@ -76,10 +77,28 @@ def energy_audit(
     )
 
 
-def _reached(values: np.ndarray, early: int) -> np.ndarray:
-    """The largest of ``values`` up to each sample, and at least up to sample ``early``."""
-    running = np.maximum.accumulate(values)
-    return np.maximum(running, running[min(early, values.size - 1)])
+def beyond(
+    model: Model,
+    scales: RunScales,
+    t: np.ndarray,
+    y: np.ndarray,
+    energy: np.ndarray,
+    balance: np.ndarray,
+    tol: float,
+    early: int | None,
+) -> tuple[int, float] | None:
+    """The first sample whose ``|balance|`` exceeds ``ENERGY_SHARE·tol`` of the energy scale and its round-off
+    floor, with that scale; ``None`` if none does (NaN counts as beyond). ``early``: judge each sample against at
+    least the scale of sample ``early`` (``None``: against the whole run's)."""
+    n = t.size
+    kinetic = kinetic_energies(model, t, y, n)
+    size, floor = energy_scale(model, scales, t, energy, kinetic, (y[:, -2], y[:, -1]), early)
+    limit = np.maximum(ENERGY_SHARE * tol * size, floor)
+    off = np.flatnonzero(~(np.abs(balance) <= limit))
+    if not off.size:
+        return None
+    i = int(off[0])
+    return i, float(size[i])
 
 
 def kinetic_energies(model: Model, t: np.ndarray, y: np.ndarray, n: int) -> np.ndarray:

@@ -31,6 +31,7 @@ from . import compiled_adaptive, lanes, recording
 from .contacts import active_set, gaps, phase_step
 from .drift import Stabilization
 from .event_watch import PhaseWatch, StepDense
+from .first_step import initial_step
 from .inputs import Options
 from .rhs import RightHandSide, step_control_atol
 from .samples import Samples
@@ -54,7 +55,7 @@ def run_events(job: lanes.Job) -> Samples:
 
 def record_events(job: lanes.Job, samples: Samples) -> recording.Recorded:
     """The events lane's recording: each sample by the model of its phase (:func:`recording.record_contacts`)."""
-    return recording.record_contacts(job.model, samples, job.opts.drift_tol)
+    return recording.record_contacts(job.model, samples, job.opts.drift_tol, job.opts.scales)
 
 
 class EventRun:
@@ -160,8 +161,13 @@ class EventRun:
             t, y, inactive, self.departing, len(active), self.gaps, lambda t_, y_: rhs.evaluate(t_, y_)["u"][cols]
         )
         phase = len(self.phases) - 1
+        solver_class = compiled_adaptive.solver_class(opts.method.name, rhs)
+        if opts.dt is None:  # the same first step in any units (:mod:`.first_step`)
+            first = initial_step(rhs, solver_class, t, y, options, opts.t_end - t)
+            if first is not None:
+                options["first_step"] = first
         try:
-            solver = compiled_adaptive.solver_class(opts.method.name, rhs)(rhs, t, y, opts.t_end, **options)
+            solver = solver_class(rhs, t, y, opts.t_end, **options)
             while solver.status == "running":
                 t_old = solver.t
                 message = solver.step()

@@ -15,6 +15,7 @@ from ..errors import GaussppError, InitialDataError, RealizabilityWarning
 from ..model.model import Model
 from ..workspace import workspace
 from .drift import projection_function
+from .scales import RunScales, row_scales, within
 
 #: ``(t, q, v, λ) ↦ (q', v')``: a projection onto the constraint.
 Projection = Callable[[float, np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -110,15 +111,30 @@ def project_initial(
 
 
 def check_on_constraint(
-    model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, tol: float, hint: str = PROJECT_HINT
+    model: Model,
+    t: float,
+    q: np.ndarray,
+    v: np.ndarray,
+    lam: np.ndarray,
+    tol: float,
+    hint: str = PROJECT_HINT,
+    scales: RunScales | None = None,
 ) -> None:
-    """Refuse initial data off a bilateral row by more than ``tol``, naming the row."""
+    """Refuse initial data off a bilateral row by more than ``tol`` of the row's own scale
+    (:func:`~gausspp.simulation.scales.row_scales`; of 1 without ``scales``), naming the row."""
     g, Phi = residuals(model, t, q, v, lam)
-    for values, what in ((g, "g(q, t)"), (Phi, "Φ(q, v, t)")):
-        bad = np.flatnonzero(~(np.abs(values) <= tol))  # NaN counts as off
+    if scales is None or model.k == 0:
+        s_g, s_Phi, f_g, f_Phi = np.ones_like(g), np.ones_like(Phi), np.zeros_like(g), np.zeros_like(Phi)
+    else:
+        y = np.concatenate([q, v, lam])[None, :]
+        s_g, s_Phi, f_g, f_Phi = (s[0] for s in row_scales(model, scales, np.array([t]), y, 1))
+    for values, size, floor, what in ((g, s_g, f_g, "g(q, t)"), (Phi, s_Phi, f_Phi, "Φ(q, v, t)")):
+        off = within(values, size, floor, tol)
+        bad = np.flatnonzero(~(off <= 1.0))  # NaN counts as off
         if bad.size:
-            worst = int(bad[np.argmax(np.nan_to_num(np.abs(values[bad]), nan=np.inf))])
+            worst = int(bad[np.argmax(np.nan_to_num(off[bad], nan=np.inf))])
+            scale = "" if scales is None else f" of the row's scale {size[worst]:.3g}"
             raise InitialDataError(
                 f"initial data are off the constraint {model.row_names[worst]!r} at t={t:.6g}: {what} = "
-                f"{values[worst]:.3g} (tolerance {tol:g}); {hint}"
+                f"{values[worst]:.3g} (tolerance {tol:g}{scale}); {hint}"
             )

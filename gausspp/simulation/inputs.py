@@ -7,7 +7,7 @@ announced (:data:`LONG_RUN_STEPS`) and reports its progress (:data:`PROGRESS_EVE
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -17,6 +17,7 @@ from ..model.model import Model
 from ..validation import array, number, positive
 from . import lanes
 from . import methods as _methods
+from .scales import RunScales
 
 #: A run with more fixed steps than this warns up front (:class:`~gausspp.LongRunWarning`) with the count.
 LONG_RUN_STEPS = 1_000_000
@@ -28,13 +29,12 @@ MAX_STEPS = 10**10
 MAX_KEPT_BYTES = 2**31
 
 
-#: The default tolerances of adaptive runs (``gp.simulate``, ``gausspp run``): the error each step admits on
-#: ``(q, v, λ)`` is ``atol + rtol·|y|``. One value for both: an ``atol`` far below ``rtol`` makes a component that
-#: starts at exactly zero (a pendulum released at rest) choose the first steps from its round-off — more steps
-#: and no better motion (the pendulum over 2 s: 40 steps and 1.1e-10 at 1e-9/1e-12, 37 and 2.5e-11 at
-#: 1e-10/1e-10, ``benchmarks/peers.py``). A state whose scale is far below 1 (micrometres) wants a lower ``atol``.
+#: The default relative tolerance of adaptive runs (``gp.simulate``, ``gausspp run``): the error each step admits on
+#: ``(q, v, λ)`` is ``atol + rtol·|y|``, with ``atol`` by default ``rtol`` times each component's own size
+#: (:func:`gausspp.simulation.scales.RunScales.atol`), so that the tolerance means the same in any units.
 DEFAULT_RTOL = 1e-10
-DEFAULT_ATOL = 1e-10
+#: ``atol=None``: derived from the run's scales.
+DEFAULT_ATOL = None
 
 
 @dataclass(frozen=True)
@@ -48,7 +48,8 @@ class Options:
     solver: str
     backend: str | None
     rtol: float
-    atol: float
+    #: ``None`` until the run's scales are read (:func:`with_scales`), then one tolerance per component
+    atol: Any
     record: Any
     constraint_tol: float
     throw: bool
@@ -59,6 +60,14 @@ class Options:
     drift_tol: float = 1e-3
     #: The lanes that can run the method with these options, fastest first (:func:`lanes.check_solver`).
     lanes: tuple[lanes.Lane, ...] = ()
+    #: The scales every tolerance of the run is measured against, read at its initial state (:func:`with_scales`).
+    scales: RunScales | None = None
+
+
+def with_scales(opts: Options, scales: RunScales) -> Options:
+    """``opts`` with the run's scales, and its ``atol`` derived from them where the user gave none."""
+    atol = scales.atol(opts.rtol, opts.method.iterates) if opts.atol is None else opts.atol
+    return replace(opts, atol=atol, scales=scales)
 
 
 def check_options(  # the arguments of gp.simulate, by name
@@ -98,7 +107,10 @@ def check_options(  # the arguments of gp.simulate, by name
                 f"dt={(t_end - t0) / 1000:.3g}"
             )
     rtol = positive("rtol", rtol, hint=" (the relative tolerance of adaptive methods, e.g. rtol=1e-9)")
-    atol = positive("atol", atol, zero_ok=True, hint=" (the absolute tolerance of adaptive methods, e.g. atol=1e-12)")
+    if atol is not None:
+        atol = positive(
+            "atol", atol, zero_ok=True, hint=" (the absolute tolerance of adaptive methods, e.g. atol=1e-12)"
+        )
     constraint_tol = positive("constraint_tol", constraint_tol, zero_ok=True)
     drift_tol = positive("drift_tol", drift_tol, hint=" (the drift a run may take, relative: e.g. drift_tol=1e-3)")
     rest_speed = positive("rest_speed", rest_speed, zero_ok=True)

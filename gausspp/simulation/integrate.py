@@ -18,6 +18,7 @@ from ..workspace import workspace
 from . import compiled_adaptive, crossing, inputs
 from . import methods as _methods
 from .compiled import rhs_function
+from .first_step import initial_step
 from .initial import Projection, projection
 from .lanes import Job
 from .progress import Progress
@@ -98,6 +99,10 @@ def run_scipy(job: Job) -> Samples:
     if meth.name in ("Radau", "BDF"):  # implicit methods: the exact Jacobian from casadi where it exists
         options["jac"] = jacobian(rhs)
     Solver = compiled_adaptive.solver_class(meth.name, rhs)  # noqa: N806  # a class
+    if opts.dt is None:  # the same first step in any units (scipy's changes with the unit of time)
+        options["first_step"] = initial_step(rhs, Solver, t0, y0, options, opts.t_end - t0)
+        if options["first_step"] is None:
+            del options["first_step"]
     solver = Solver(rhs, t0, y0, opts.t_end, **options)
     watch = crossing.SingularityWatch(model, t0, y0, rhs) if crossing.applies(model) else None
     events: list[dict[str, Any]] = []

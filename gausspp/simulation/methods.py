@@ -56,6 +56,10 @@ class Method:
     description : str
     tableau : Tableau or None
         For explicit Runge–Kutta methods.
+    iterates : bool
+        True if each step solves its stages by iteration (Newton or functional): the iteration cannot converge
+        below the round-off of the right-hand side times its conditioning, so its absolute tolerance keeps a floor
+        of ``rtol`` times the machine's size (:meth:`gausspp.simulation.scales.RunScales.atol`).
     """
 
     name: str
@@ -63,6 +67,7 @@ class Method:
     adaptive: bool
     description: str
     tableau: Tableau | None = None
+    iterates: bool = False
 
 
 METHODS: dict[str, Method] = {
@@ -77,13 +82,16 @@ METHODS: dict[str, Method] = {
         ),
         Method("RK45", 5, True, "scipy Dormand–Prince 5(4), adaptive"),
         Method("DOP853", 8, True, "scipy Dormand–Prince 8(5,3), adaptive"),
-        Method("Radau", 5, True, "scipy Radau IIA, implicit, stiff"),
-        Method("BDF", 1, True, "scipy variable-order BDF, stiff; stays at order 1 when the step is imposed"),
+        Method("Radau", 5, True, "scipy Radau IIA, implicit, stiff", iterates=True),
+        Method(
+            "BDF", 1, True, "scipy variable-order BDF, stiff; stays at order 1 when the step is imposed", iterates=True
+        ),
         Method(
             "cvodes",
             1,
             True,
             "SUNDIALS CVODES variable-order BDF via casadi (direct path); stays at order 1 when the step is imposed",
+            iterates=True,
         ),
         Method(
             "cvodes-adams",
@@ -91,6 +99,7 @@ METHODS: dict[str, Method] = {
             True,
             "SUNDIALS CVODES variable-order (1–12) Adams–Moulton via casadi, functional iteration (non-stiff; no "
             "Jacobian); stays at order 1 when the step is imposed",
+            iterates=True,
         ),
     )
 }

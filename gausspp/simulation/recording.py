@@ -37,6 +37,7 @@ from .margins import SMALL_MARGIN, audit
 from .residual_audit import residual_audit
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
+from .scales import RunScales
 from .trajectory import Trajectory
 
 #: A recorded trajectory, the failure the recording found (or ``None``), the warnings it has to give.
@@ -115,7 +116,9 @@ class Columns:
         return np.concatenate([known, rest])
 
 
-def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples, tol: float) -> Recorded:
+def record_smooth(
+    model: Model, rhs: AnyRightHandSide, samples: Samples, tol: float, scales: RunScales | None = None
+) -> Recorded:
     """The trajectory of a smooth run, its margin and its residuals (to ``tol``) audited; samples past a lost
     margin or the first beyond ``tol`` are dropped."""
     y = samples.y.copy()
@@ -138,17 +141,17 @@ def record_smooth(model: Model, rhs: AnyRightHandSide, samples: Samples, tol: fl
     margin = cols.margin(known)
     crossed = tuple(e["t"] for e in samples.events if e.get("kind") == "singular position")
     kept, failure, notes = audit(model, rhs, samples.t[: cols.kept], y, cols.S[: cols.kept], margin, failure, crossed)
-    kept, failure = _within(model, samples.t, y, cols, tol, kept, failure)
+    kept, failure = _within(model, samples.t, y, cols, tol, kept, failure, scales)
     return _trajectory(model, samples, cols, margin, kept), failure, notes
 
 
 def record_job(job: Any, samples: Samples) -> Recorded:
     """The default recorder of a lane (:attr:`~gausspp.simulation.lanes.Lane.recorder`): a smooth run's samples
     (:func:`record_smooth`) with the job's step and drift tolerance."""
-    return record_smooth(job.model, job.rhs, samples, job.opts.drift_tol)
+    return record_smooth(job.model, job.rhs, samples, job.opts.drift_tol, job.opts.scales)
 
 
-def record_contacts(model: Model, samples: Samples, tol: float) -> Recorded:
+def record_contacts(model: Model, samples: Samples, tol: float, scales: RunScales | None = None) -> Recorded:
     """The trajectory of an event-driven run: each sample by the model of its phase, with the contact gaps; its
     residuals audited to ``tol``."""
     assert samples.active is not None  # an event-driven run names each sample's phase
@@ -163,17 +166,24 @@ def record_contacts(model: Model, samples: Samples, tol: float) -> Recorded:
 
     cols = Columns(model, samples.t.size, False)
     failure = _fill(cols, evaluate, 0)
-    kept, failure = _within(model, samples.t, samples.y, cols, tol, cols.kept, failure)
+    kept, failure = _within(model, samples.t, samples.y, cols, tol, cols.kept, failure, scales)
     return _trajectory(model, samples, cols, cols.margin(), kept), failure, []
 
 
 def _within(
-    model: Model, t: np.ndarray, y: np.ndarray, cols: Columns, tol: float, kept: int, failure: Exception | None
+    model: Model,
+    t: np.ndarray,
+    y: np.ndarray,
+    cols: Columns,
+    tol: float,
+    kept: int,
+    failure: Exception | None,
+    scales: RunScales | None = None,
 ) -> tuple[int, Exception | None]:
     """The samples to keep and the failure once the residuals and the energy balance are audited
     (:mod:`.residual_audit`, :mod:`.energy_audit`): a departure from either explains any failure found after it."""
-    n, drift = residual_audit(model, t, y, cols.g, cols.residual, tol, kept)
-    n_energy, energy_drift = energy_audit(model, t, y, cols.energy, tol, kept)
+    n, drift = residual_audit(model, t, y, cols.g, cols.residual, tol, kept, scales)
+    n_energy, energy_drift = energy_audit(model, t, y, cols.energy, tol, kept, scales)
     if energy_drift is not None and (drift is None or n_energy < n):  # the earlier departure (a row at a tie)
         n, drift = n_energy, energy_drift
     if drift is None or (failure is not None and n >= kept):

@@ -28,7 +28,7 @@ from .drift import Stabilization
 AUDIT_CHANNELS = 2
 
 
-def step_control_atol(atol: float, n: int) -> np.ndarray:
+def step_control_atol(atol: float | np.ndarray, n: int) -> np.ndarray:
     """The absolute tolerance of an adaptive run over the state ``y`` of size ``n``: ``atol`` on ``(q, v, λ)``,
     ``inf`` on the work integrals ``W_R, W_F``.
 
@@ -37,8 +37,8 @@ def step_control_atol(atol: float, n: int) -> np.ndarray:
     ideal constraint's power is round-off, and its integral's "error" at ``atol = 1e-12`` set the step size of
     every ideal run — 116 DOP853 steps on the pendulum where the motion needs 33. They are integrated by the same
     steps, with the method's order, and the energy audit checks them."""
-    tol = np.full(n, float(atol))
-    tol[n - AUDIT_CHANNELS :] = np.inf
+    tol = np.full(n, np.inf)
+    tol[: n - AUDIT_CHANNELS] = np.broadcast_to(np.asarray(atol, float), (n - AUDIT_CHANNELS,))
     return tol
 
 

@@ -26,9 +26,10 @@ from . import methods as _methods
 from .drift import Baumgarte, Stabilization, as_stabilization
 from .events import check_gaps
 from .initial import check_on_constraint, initial_state, project_initial, redundant_rows
-from .inputs import DEFAULT_ATOL, DEFAULT_RTOL, Options, check_options
+from .inputs import DEFAULT_RTOL, Options, check_options, with_scales
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
+from .scales import run_scales
 from .tolerance import within_tolerance
 from .trajectory import Trajectory
 
@@ -47,7 +48,7 @@ def simulate(
     backend: str | None = None,
     stabilize: str | Baumgarte | list[Any] | None = None,
     rtol: float = DEFAULT_RTOL,
-    atol: float = DEFAULT_ATOL,
+    atol: float | None = None,
     record: int | Any = 1,
     constraint_tol: float = 1e-8,
     throw: bool = True,
@@ -82,9 +83,12 @@ def simulate(
     stabilize : None, "baumgarte", "project", Baumgarte, or a list of these
         Drift control (off by default).
     rtol, atol : float
-        Tolerances of adaptive methods (default 1e-10 each): a step's error estimate on ``q``, ``v``, ``λ`` within
+        Tolerances of adaptive methods: a step's error estimate on each component of ``q``, ``v``, ``λ`` within
         ``atol + rtol·|y|``; the works ``W_R``, ``W_F`` are integrated by the same steps and do not choose them.
-        Lower ``atol`` for a state whose scale is far below 1.
+        ``rtol`` defaults to 1e-10. ``atol`` defaults to ``rtol`` times each component's own size, read from the
+        initial state and the machine (:mod:`gausspp.simulation.scales`): the same relative accuracy in any
+        units, for a small motion about an equilibrium as for a large one. A number is an absolute tolerance in
+        the state's units, the same for every component.
     record : int or array
         Record every ``record``-th step (fixed-step methods; every accepted step for adaptive
         ones), or at the given times (must lie on the grid for fixed-step methods).
@@ -96,13 +100,16 @@ def simulate(
         slower than ``rest_speed`` ends in rest; a run with more than ``max_events`` events stops.
     constraint_tol : float
         The accuracy the run promises (default 1e-8): the initial data must keep it, and a run that reached
-        ``t_end`` is a success only if every sample keeps ``|g_i| ≤ constraint_tol·(1 + ‖q‖∞)``,
-        ``|Φ_i| ≤ constraint_tol·(1 + ‖v‖∞)`` and, where the energy balance closes, the balance within
-        ``100·constraint_tol`` of the run's energy scale; otherwise its status is ``"drifted"`` (the trajectory
-        whole, a :class:`~gausspp.DriftWarning`; not raised: :mod:`gausspp.simulation.tolerance`).
+        ``t_end`` is a success only if every sample keeps ``|g_i| ≤ constraint_tol·s_g,i`` and
+        ``|Φ_i| ≤ constraint_tol·s_Φ,i`` — each row against its own scale, the size of the terms it adds up
+        (:func:`gausspp.simulation.scales.row_scales`) — and, where the energy balance closes, the balance within
+        ``100·constraint_tol`` of the run's energy scale (:func:`gausspp.simulation.scales.energy_scale`);
+        otherwise its status is ``"drifted"`` (the trajectory whole, a :class:`~gausspp.DriftWarning`; not raised:
+        :mod:`gausspp.simulation.tolerance`). Every scale is read from the machine (docs/guide.md, "The scales of a
+        run"): the same at rest and in motion, in any units.
     drift_tol : float
         How far the motion may leave its constraints before the run counts as failed: a sample with
-        ``|g_i| > drift_tol·(1 + ‖q‖∞)`` or ``|Φ_i| > drift_tol·(1 + ‖v‖∞)`` ends the run with a
+        ``|g_i| > drift_tol·s_g,i`` or ``|Φ_i| > drift_tol·s_Φ,i`` (the rows' own scales) ends the run with a
         :class:`~gausspp.DriftError` (a step too long for the motion, a step across a singular position off the
         branch). Rows of a model with bounded actuators are not checked (a saturated actuator falls short of its
         constraint: ``Trajectory.tracking_error``). Where the model's energy balance closes, a sample with
@@ -140,7 +147,7 @@ def simulate(
         return servo_lane.run_servo(model, q0, v0, opts)
     stab = as_stabilization(stabilize, opts.dt)
     try:
-        y0, redundant, chosen = _start(model, q0, v0, lam0, stab, opts)
+        y0, redundant, chosen, opts = _start(model, q0, v0, lam0, stab, opts)
     except RealizabilityError as exc:  # a servo reached only through higher derivatives: point to index reduction
         raise servo_reach.explain(model, exc, opts.t0, q0, v0) from None
     rhs = None if model.contacts else _right_hand_side(model, opts, stab, redundant)  # the events lane: per phase
@@ -157,6 +164,7 @@ def simulate(
                 model,
                 recording.finish(chosen.record(job, samples), samples.failure, opts.throw),
                 opts.constraint_tol,
+                opts.scales,
             ),
         ),
     )
@@ -195,21 +203,23 @@ def _labelled(lane: str, route: str, run: Callable[[], Trajectory]) -> Trajector
 
 def _start(
     model: Model, q0: Any, v0: Any, lam0: Any, stab: Stabilization, opts: Options
-) -> tuple[np.ndarray, bool, lanes.Lane]:
+) -> tuple[np.ndarray, bool, lanes.Lane, Options]:
     """The initial state ``y0`` (projected if asked, checked on the constraint), whether the rows are redundant
-    there, and the lane that runs the model."""
+    there, the lane that runs the model, and the options with the run's scales (:mod:`.scales`)."""
     q, v, lam = initial_state(model, opts.t0, q0, v0, lam0)
     if model.contacts:  # the phases decide their rows; a contact's gap must not be negative
         lane = lanes.check_kind(opts.method, lanes.kind_of(model), opts.solver, stab.project, opts.lanes)
-        check_on_constraint(model, opts.t0, q, v, lam, opts.constraint_tol, hint="correct q0/v0")
+        scales = run_scales(model, opts.t0, q, v, lam, opts.t_end - opts.t0)
+        check_on_constraint(model, opts.t0, q, v, lam, opts.constraint_tol, hint="correct q0/v0", scales=scales)
         check_gaps(model, opts.t0, q, v)
-        return np.concatenate([q, v, lam, [0.0, 0.0]]), False, lane
+        return np.concatenate([q, v, lam, [0.0, 0.0]]), False, lane, with_scales(opts, scales)
     redundant = redundant_rows(model, opts.solver, opts.backend, opts.t0, q, v, lam)
     if stab.project:
         q, v = project_initial(model, opts.t0, q, v, lam, opts.constraint_tol, redundant)
-    check_on_constraint(model, opts.t0, q, v, lam, opts.constraint_tol)
+    scales = run_scales(model, opts.t0, q, v, lam, opts.t_end - opts.t0)
+    check_on_constraint(model, opts.t0, q, v, lam, opts.constraint_tol, scales=scales)
     lane = lanes.check_kind(opts.method, lanes.kind_of(model, redundant), opts.solver, stab.project, opts.lanes)
-    return np.concatenate([q, v, lam, [0.0, 0.0]]), redundant, lane
+    return np.concatenate([q, v, lam, [0.0, 0.0]]), redundant, lane, with_scales(opts, scales)
 
 
 def _right_hand_side(model: Model, opts: Options, stab: Stabilization, redundant: bool) -> AnyRightHandSide:

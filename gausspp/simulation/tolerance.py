@@ -6,8 +6,10 @@ Two thresholds judge a recorded motion. ``drift_tol`` (default 1e-3, :mod:`.resi
 singular position — and ends the run as failed. ``constraint_tol`` (default 1e-8, the same bound the initial
 data must meet) is the accuracy the run promises: every sample must keep
 
-* ``|g_i| ≤ constraint_tol·(1 + ‖q‖∞)`` and ``|Φ_i| ≤ constraint_tol·(1 + ‖v‖∞)`` for every constraint row,
-* ``|E − E₀ − W_R − W_F| ≤ ENERGY_SHARE·constraint_tol`` of the run's energy scale where the balance closes.
+* ``|g_i| ≤ constraint_tol·s_g,i`` and ``|Φ_i| ≤ constraint_tol·s_Φ,i`` for every constraint row, each against
+  its own scale (:func:`~gausspp.simulation.scales.row_scales`),
+* ``|E − E₀ − W_R − W_F| ≤ ENERGY_SHARE·constraint_tol`` of the run's energy scale where the balance closes
+  (:func:`~gausspp.simulation.scales.energy_scale`), or within its round-off floor.
 
 A run that finished but broke one of them is not called a success: its status is ``"drifted"``, its message
 names the first sample, the row (or ``"energy balance"``) and the value, and a :class:`~gausspp.DriftWarning`
@@ -25,23 +27,28 @@ import numpy as np
 
 from ..errors import DriftError, DriftWarning
 from ..model.model import Model
-from .energy_audit import ENERGY_SHARE, closes, kinetic_energies
+from .energy_audit import ENERGY_SHARE, beyond, closes
 from .residual_audit import residual_audit
+from .scales import RunScales, scales_at_first
 from .trajectory import Trajectory
 
 #: The status of a run that reached ``t_end`` with a residual or an energy balance beyond ``constraint_tol``.
 DRIFTED = "drifted"
 
 
-def within_tolerance(model: Model, traj: Trajectory, constraint_tol: float) -> Trajectory:
+def within_tolerance(
+    model: Model, traj: Trajectory, constraint_tol: float, scales: RunScales | None = None
+) -> Trajectory:
     """``traj`` unchanged if every sample keeps ``constraint_tol`` (module docstring), else marked
-    ``"drifted"`` with a warning that names the first sample beyond it."""
+    ``"drifted"`` with a warning that names the first sample beyond it. ``scales``: the run's, read at the first
+    sample if not given."""
     if traj.status != "success" or not traj.t.size:
         return traj
     n = traj.t.size
     y = np.column_stack([traj.q, traj.v, traj.lam, traj.work_reaction, traj.work_forces])
-    _, rows = residual_audit(model, traj.t, y, traj.g, traj.residual, constraint_tol, n)
-    energy = _energy_beyond(model, traj, y, constraint_tol)
+    scales = scales or scales_at_first(model, traj.t, y)
+    _, rows = residual_audit(model, traj.t, y, traj.g, traj.residual, constraint_tol, n, scales)
+    energy = _energy_beyond(model, traj, y, constraint_tol, scales)
     found = [e for e in (rows, energy) if e is not None]
     if not found:
         return traj
@@ -51,7 +58,7 @@ def within_tolerance(model: Model, traj: Trajectory, constraint_tol: float) -> T
         what += " of the run's energy scale"
     else:
         what = f"the constraint {first.constraint!r} was off by {first.residual:.3g}, beyond constraint_tol"
-        what += " relative to the state (|g| ≤ tol·(1 + ‖q‖∞), |Φ| ≤ tol·(1 + ‖v‖∞))"
+        what += " of the row's own scale"
     message = (
         f"the run reached t={traj.t[-1]:.6g} but not within constraint_tol={constraint_tol:.3g}: first at "
         f"t={first.t:.6g}, {what}; a shorter step (dt), tighter rtol/atol or stabilize='baumgarte' keeps the motion "
@@ -61,17 +68,14 @@ def within_tolerance(model: Model, traj: Trajectory, constraint_tol: float) -> T
     return replace(traj, status=DRIFTED, message=message)
 
 
-def _energy_beyond(model: Model, traj: Trajectory, y: np.ndarray, tol: float) -> DriftError | None:
-    """The first sample whose energy balance leaves ``ENERGY_SHARE·tol`` of the whole run's energy scale (the
-    largest kinetic energy plus the largest exchanges ``|E − E₀| + |W_R| + |W_F|``), or ``None``."""
+def _energy_beyond(model: Model, traj: Trajectory, y: np.ndarray, tol: float, scales: RunScales) -> DriftError | None:
+    """The first sample whose energy balance leaves ``ENERGY_SHARE·tol`` of the whole run's energy scale (above its
+    round-off floor, :func:`~gausspp.simulation.scales.energy_scale`), or ``None``."""
     if traj.t.size < 2 or not closes(model):
         return None
     balance = traj.energy_balance()
-    exchange = np.abs(traj.energy - traj.energy[0]) + np.abs(traj.work_reaction - traj.work_reaction[0])
-    exchange += np.abs(traj.work_forces - traj.work_forces[0])
-    scale = np.nanmax(exchange) + kinetic_energies(model, traj.t, y, traj.t.size).max()
-    off = np.flatnonzero(~(np.abs(balance) <= ENERGY_SHARE * tol * scale))
-    if not off.size:
+    off = beyond(model, scales, traj.t, y, traj.energy, balance, tol, None)
+    if off is None:
         return None
-    i = int(off[0])
+    i = off[0]
     return DriftError("", t=float(traj.t[i]), constraint="energy balance", residual=float(balance[i]))
