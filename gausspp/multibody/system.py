@@ -376,7 +376,9 @@ class Multibody:
             rhs = -gt - Jv[:, by_rate] @ v_now[by_rate]
             v_now[others] = np.linalg.lstsq(Jv[:, others], rhs, rcond=None)[0]
             miss = np.abs(Jv @ v_now + gt)
-            if np.max(miss, initial=0.0) > 1e-10 * (1.0 + np.max(np.abs(v_now))):
+            terms = np.abs(Jv) @ np.abs(v_now) + np.abs(gt)  # each row against the terms it adds up, above the
+            solve = 1e3 * np.finfo(float).eps * np.abs(Jv).sum(axis=1) * np.abs(v_now).max(initial=0.0)  # round-off
+            if np.any(miss > 1e-10 * terms + solve):
                 worst = int(np.argmax(miss))
                 raise InitialDataError(
                     f"Multibody.assemble: the rates {sorted(rate_keys)} contradict the joints — row "

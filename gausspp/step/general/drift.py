@@ -12,16 +12,27 @@ from ..protocol import StepModel
 
 
 def relative_drift(model: StepModel) -> ca.SX:
-    """How far the state is off the constraints, relative: ``max |Φᵢ|/‖Jᵢ‖/(1 + max|v|)`` and, on holonomic rows,
-    ``|gᵢ|/‖Jᵢ‖/(1 + max|q|)`` (as :func:`.manifold.off_manifold`)."""
+    """How far the state is off the constraints, relative: ``max |Φᵢ|/‖Jᵢ‖/(1 + vᵢ)`` and, on holonomic rows,
+    ``|gᵢ|/‖Gᵢ‖/(1 + qᵢ)``, with ``vᵢ``, ``qᵢ`` the size of the components row ``i`` depends on (``Σ_j |J_ij||v_j| /
+    Σ_j |J_ij|``, the same with ``G = ∂g/∂q``) — never the largest coordinate of the whole state (as
+    :func:`.manifold.off_manifold`)."""
     p, mech = model.expressions, model.mechanism
     if not model.k:
         return ca.SX(0)
     J, Phi = p.J, p.Phi
     nrm = ca.sqrt(ca.sum2(J * J))
     nrm = ca.if_else(nrm == 0, 1, nrm)
-    off = ca.mmax(ca.fabs(Phi) / nrm) / (1 + ca.mmax(ca.fabs(mech.v)))
+    off = ca.mmax(ca.fabs(Phi) / nrm / (1 + row_size(J, mech.v)))
     hol = model.holonomic_rows
     if hol and p.g is not None:
-        off = ca.fmax(off, ca.mmax(ca.fabs(p.g[hol]) / nrm[hol]) / (1 + ca.mmax(ca.fabs(mech.q))))
+        G = ca.jacobian(p.g[hol], mech.q)
+        g_nrm = ca.sqrt(ca.sum2(G * G))
+        g_nrm = ca.if_else(g_nrm == 0, 1, g_nrm)
+        off = ca.fmax(off, ca.mmax(ca.fabs(p.g[hol]) / g_nrm / (1 + row_size(G, mech.q))))
     return off
+
+
+def row_size(J: ca.SX, x: ca.SX) -> ca.SX:
+    """The size of the components each row of ``J`` depends on: ``Σ_j |J_ij||x_j| / Σ_j |J_ij|`` (0 for a zero row)."""
+    weight = ca.sum2(ca.fabs(J))
+    return ca.mtimes(ca.fabs(J), ca.fabs(x)) / ca.if_else(weight == 0, 1, weight)

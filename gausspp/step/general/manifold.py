@@ -34,16 +34,24 @@ def off_manifold(
 ) -> tuple[float, int]:
     """How far the state is from the constraints, and the row farthest off.
 
-    Each row's residual is a distance in coordinates (``|g_i| / ‖J_i‖``, ``|Φ_i| / ‖J_i‖``) relative to the
-    state's size; compared with :data:`REACH_TOL`.
+    Each row's residual is a distance in coordinates (``|g_i| / ‖J_i‖``, ``|Φ_i| / ‖J_i‖``) relative to the size
+    of the components the row depends on (:func:`_row_size`); compared with :data:`REACH_TOL`.
     """
     norms = np.sqrt(np.einsum("ij,ij->i", J, J))
     norms[norms == 0] = 1.0
     rows = model.holonomic_rows
-    off = np.abs(Phi) / norms / (1.0 + float(np.abs(v).max(initial=0.0)))
-    off[rows] = np.maximum(off[rows], np.abs(g[rows]) / norms[rows] / (1.0 + float(np.abs(q).max())))
+    off = np.abs(Phi) / norms / (1.0 + _row_size(J, v))
+    q_size = _row_size(J, q) if q.size == v.size else np.full(J.shape[0], float(np.abs(q).max(initial=0.0)))
+    off[rows] = np.maximum(off[rows], np.abs(g[rows]) / norms[rows] / (1.0 + q_size[rows]))
     worst = int(np.argmax(off)) if off.size else 0
     return (float(off[worst]) if off.size else 0.0), worst
+
+
+def _row_size(J: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The size of the components each row depends on, ``Σ_j |J_ij||x_j| / Σ_j |J_ij|`` — not the largest component
+    of the whole state (a far coordinate the row does not involve does not loosen it)."""
+    weight = np.abs(J).sum(axis=1)
+    return np.abs(J) @ np.abs(x) / np.where(weight > 0, weight, 1.0)
 
 
 def on_manifold(model: StepModel, J: np.ndarray, Phi: np.ndarray, g: np.ndarray, q: np.ndarray, v: np.ndarray) -> bool:
