@@ -18,15 +18,15 @@ from collections.abc import Callable
 from typing import Any
 
 from ..errors import InputError
+from ..validation import number, short
 
 
 def _coefficient(owner: str, name: str, value: Any, upper: float = math.inf) -> float:
-    try:
-        x = float(value)
-    except (TypeError, ValueError):
-        raise InputError(f"{owner}: {name} must be a number, got {value!r}") from None
-    if not (0.0 <= x <= upper) or math.isnan(x):
-        bound = "[0, 1]" if upper == 1.0 else "≥ 0 and finite"
+    """``value`` as one finite number in ``[0, upper]``, or an error naming ``owner`` and the argument."""
+    bound = "[0, 1]" if upper == 1.0 else "≥ 0"
+    kind = f"in {bound}" if upper == 1.0 else bound
+    x = float(number(f"{owner}: {name} must be a number, finite and {kind}, got {value!r}", value))
+    if not 0.0 <= x <= upper:
         raise InputError(f"{owner}: {name} must be {bound}, got {value!r}")
     return x
 
@@ -41,9 +41,9 @@ class FrictionContact:
     slip : callable ``(q, v) -> scalar``
         The slip velocity of the contact point along the surface, linear in ``v``.
     mu : float
-        Kinetic friction coefficient ``μ ≥ 0``.
+        Kinetic friction coefficient ``μ ≥ 0``, a finite number.
     mu_static : float, optional
-        Static coefficient ``μ_s ≥ μ`` (default ``μ``).
+        Static coefficient ``μ_s ≥ μ``, finite (default ``μ``).
     restitution : float in [0, 1]
         Newton's coefficient of an impact closing the contact (default 0: plastic).
     name : str, optional
@@ -73,3 +73,19 @@ class FrictionContact:
 
     def __repr__(self) -> str:
         return f"FrictionContact(name={self.name!r}, mu={self.mu:g}, mu_static={self.mu_static:g})"
+
+
+def as_contacts(where: str, contacts: Any) -> list[FrictionContact]:
+    """``contacts`` as a non-empty list of :class:`FrictionContact` (one contact alone: a list of one), or an error
+    naming ``where`` it was passed."""
+    if isinstance(contacts, FrictionContact):
+        return [contacts]
+    try:
+        listed = list(contacts)
+    except TypeError:
+        listed = []
+    if not listed or not all(isinstance(c, FrictionContact) for c in listed):
+        raise InputError(
+            f"{where}: contacts must be a gp.FrictionContact or a non-empty list of them, got {short(contacts)}"
+        )
+    return listed

@@ -31,13 +31,13 @@ from typing import Any
 import numpy as np
 
 from ..errors import BackendUnavailableError
-from .contact import FrictionContact
+from .contact import FrictionContact, as_contacts
 from .kinematics import ContactState
 
 
 def gauss_qp_step(
     state: ContactState,
-    contacts: list[FrictionContact],
+    contacts: FrictionContact | list[FrictionContact],
     closed: list[int],
     *,
     slip_tol: float = 1e-10,
@@ -49,6 +49,7 @@ def gauss_qp_step(
     a number of facets for two-component slips. ``relaxed`` keeps every normal row an inequality (the convex
     relaxation of the module docstring)."""
     clarabel = _clarabel_module()
+    contacts = as_contacts("gauss_qp_step", contacts)
     cols, unknowns = _columns(state, contacts, closed, slip_tol)
     a0 = np.linalg.solve(state.A, state.f)
     N, F = np.zeros(len(contacts)), [np.zeros(len(si)) for si in state.s]

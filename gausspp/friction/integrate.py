@@ -28,7 +28,7 @@ from ..model.model import Model
 from ..step.outcome import not_positive_definite
 from ..validation import array, flag, positive
 from ..workspace import workspace
-from .contact import FrictionContact
+from .contact import FrictionContact, as_contacts
 from .fixed_step import Phases, run_phase
 from .kinematics import ContactKinematics, ContactState
 from .modes import OPEN, SLIDE, STICK, Modes, Solution, check_painleve, choose, solve
@@ -183,7 +183,7 @@ class _Runner:
 
 def simulate_friction(
     system: Mechanism | Model,
-    contacts: list[FrictionContact],
+    contacts: FrictionContact | list[FrictionContact],
     q0: Any,
     v0: Any,
     t_end: float,
@@ -196,10 +196,10 @@ def simulate_friction(
     throw: bool = True,
     record: Any = None,
 ) -> FrictionRun:
-    """Simulate ``system`` (a mechanism, or a model without constraints) with frictional ``contacts`` from
-    ``(q0, v0)`` to ``t_end`` (module docstring). Raises :class:`~gausspp.PainleveError` where sliding makes
-    the contact problem inconsistent; a failure midway keeps what was computed (``.run``, or the returned run
-    marked failed with ``throw=False``).
+    """Simulate ``system`` (a mechanism, or a model without constraints) with frictional ``contacts`` (a
+    :class:`FrictionContact` or a list of them) from ``(q0, v0)`` to ``t_end`` (module docstring). Raises
+    :class:`~gausspp.PainleveError` where sliding makes the contact problem inconsistent; a failure midway keeps
+    what was computed (``.run``, or the returned run marked failed with ``throw=False``).
 
     ``step``: ``None`` (default) integrates each phase adaptively (DOP853, Radau; ``rtol``, ``atol``); a number
     ``h`` takes RK4 steps of ``h`` compiled into one casadi graph per phase, each event located exactly inside its
@@ -259,7 +259,7 @@ class FrictionOptions:
         )
 
 
-def _runner(system: Mechanism | Model, contacts: list[FrictionContact]) -> _Runner:
+def _runner(system: Mechanism | Model, contacts: FrictionContact | list[FrictionContact]) -> _Runner:
     """The runner of ``system``'s mechanism and ``contacts`` (checked), kept in the mechanism's workspace with its
     compiled phases for the next run."""
     mech = system.mechanism if isinstance(system, Model) else system
@@ -267,9 +267,7 @@ def _runner(system: Mechanism | Model, contacts: list[FrictionContact]) -> _Runn
         raise InputError("simulate_friction takes a mechanism (or a model without constraint rows)")
     if not isinstance(mech, Mechanism):
         raise InputError(f"simulate_friction takes a gausspp mechanism or model, got {type(system).__name__}")
-    contacts = list(contacts)
-    if not contacts or not all(isinstance(c, FrictionContact) for c in contacts):
-        raise InputError("contacts must be a non-empty list of gp.FrictionContact")
+    contacts = as_contacts("simulate_friction", contacts)
     key = ("friction-runner", *((c, c.gap, c.slip, c.mu, c.mu_static, c.restitution) for c in contacts))
     return workspace(mech).get(key, lambda: _Runner(mech, contacts))
 

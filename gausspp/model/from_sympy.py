@@ -26,7 +26,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ..errors import BackendUnavailableError, InputError
+from ..errors import BackendUnavailableError, InputError, UnknownNameError
 from ..validation import number
 from .constraints import Constraint, Holonomic
 from .mechanism import MassMatrix
@@ -88,7 +88,8 @@ def from_sympy(
     source : KanesMethod, LagrangesMethod or System
         The system; a ``LagrangesMethod`` need not have formed its equations yet.
     parameters : mapping, optional
-        Numbers for the constant symbols (masses, lengths, ``g`` …): ``{m: 1.0, l: 0.5}``.
+        Numbers for the constant symbols (masses, lengths, ``g`` …): ``{m: 1.0, l: 0.5}``, keyed by the sympy
+        symbols or by their names (``{"m": 1.0}``, where one symbol of the system has that name).
     realization : Realization, str or mapping, optional
         How the constraints are kept: one realization for all, or ``{"nonholonomic[0]": gp.Force(...)}`` per
         constraint name (the others ideal). Default: ideal.
@@ -106,19 +107,18 @@ def from_sympy(
         Without sympy (``pip install gausspp[sympy]``).
     InputError
         For another ``source``, a symbol without a value, a ``Derivative`` in the equations or a function
-        casadi lacks (the message quotes the term).
+        casadi lacks (the message quotes the term); a name in ``parameters`` that no constant of the system has,
+        or that several have.
     """
     me = _sympy_mechanics()
     parts = _parts(source, me)
     if parameters is not None and not isinstance(parameters, Mapping):
         raise InputError(f"from_sympy: parameters must map symbols to numbers, got {type(parameters).__name__}")
-    values = {
-        symbol: number(f"from_sympy: parameter {symbol} must be a finite number, got {value!r}", value)
-        for symbol, value in (parameters or {}).items()
-    }
     t = _time(me)
     kd = {} if parts.extra_leaves else {qi.diff(t): k for qi, k in zip(parts.q, parts.qdot, strict=True)}
-    mechanism = _mechanism(parts, values, me, energy_parts(source, parts.u, kd, me))
+    energy = energy_parts(source, parts.u, kd, me)
+    values = _parameter_values(parameters or {}, _constants(parts, energy, me))
+    mechanism = _mechanism(parts, values, me, energy)
     names = tuple(str(getattr(qi, "func", qi)) for qi in parts.q)
     mechanism.coordinate_names, mechanism.velocity_names = names, tuple(parts.speed_names)  # names in results
     constraints = _constraints(parts, values, mechanism, me, realization)
@@ -218,6 +218,52 @@ def _lagrange_parts(method: Any, me: Any) -> _Parts:
     names = [f"{getattr(qi, 'func', qi)}'" for qi in q]
     leaves = {d: i for i, d in enumerate(qd)}
     return _Parts(q, qd, method.mass_matrix[:, :n], method.forcing, qd, holonomic, velocity, names, leaves)
+
+
+def _constants(parts: _Parts, energy: tuple[Any, list[Any]] | None, me: Any) -> list[Any]:
+    """The leaves that take a number: the symbols of the equations, constraints and energy (not the time), and the
+    functions of time among them that are neither coordinates nor speeds."""
+    from sympy import sympify
+    from sympy.core.function import AppliedUndef
+
+    exprs = [parts.mass, parts.forcing, *parts.qdot, *parts.holonomic, *parts.velocity]
+    exprs += [] if energy is None else [energy[0], *energy[1]]
+    known = {*parts.q, *parts.u, *parts.extra_leaves, _time(me)}
+    found: set[Any] = set()
+    for expr in map(sympify, exprs):
+        found |= expr.free_symbols | expr.atoms(AppliedUndef)
+    return sorted(found - known, key=str)
+
+
+def _parameter_values(parameters: Mapping[Any, Any], constants: list[Any]) -> dict[Any, float]:
+    """sympy leaf → number: a key that is a name (``"m"``) stands for the one constant of that name
+    (:func:`_named`); a value that is no finite number, or a leaf given twice, is refused by name."""
+    values: dict[Any, float] = {}
+    for key, value in parameters.items():
+        leaf = _named(key, constants) if isinstance(key, str) else key
+        if leaf in values:
+            raise InputError(
+                f"from_sympy: parameter {leaf} is given twice (by its symbol and its name {key!r}); keep one"
+            )
+        values[leaf] = number(f"from_sympy: parameter {key} must be a finite number, got {value!r}", value)
+    return values
+
+
+def _named(key: str, constants: list[Any]) -> Any:
+    """The constant whose name is ``key`` (``"F"`` or ``"F(t)"`` for a function of time ``F(t)``), or an error
+    naming the key and the fix."""
+    found = [c for c in constants if key in (str(c), str(getattr(c, "func", c)))]
+    if len(found) == 1:
+        return found[0]
+    if not found:
+        raise UnknownNameError(
+            f"from_sympy: parameters names {key!r}, which is no constant of the system; its constants are "
+            f"{[str(c) for c in constants]} (key parameters by these names or by the sympy symbols)"
+        )
+    raise InputError(
+        f"from_sympy: parameters names {key!r}, which {len(found)} different symbols of the system are called "
+        "(their assumptions differ); key it by the sympy symbol itself"
+    )
 
 
 def _leaves(parts: _Parts, values: dict[Any, float], q: Any, v: Any, t: Any, me: Any) -> dict[Any, Any]:

@@ -34,6 +34,10 @@ from .symbolic import evaluate
 EXTRA = "pip install 'gausspp[robots]'"
 #: Joint types that are one coordinate each.
 ONE_DOF = ("revolute", "continuous", "prismatic")
+#: Joint types :func:`from_urdf` reads: the one-coordinate ones, and ``fixed``.
+READ = (*ONE_DOF, "fixed")
+#: URDF's other joint types (adam-robotics does not model them).
+UNREAD = ("planar", "floating")
 
 
 class URDFMechanism(MassMatrix):
@@ -101,7 +105,8 @@ def from_urdf(
         The URDF file (``package://`` mesh addresses do not matter: only the inertias and joints are read).
     joints : sequence of str, optional
         The joints that move, in the order of ``q``; default every revolute, continuous and prismatic
-        joint in the file's order. Other joints are held at zero.
+        joint in the file's order. Other joints are held at zero. A ``planar`` or ``floating`` joint (or a
+        type URDF does not have) is refused, naming the joint.
     g : float
         Gravity's magnitude along ``−z`` of the base frame (gausspp's convention, 9.81).
     torque : callable ``(q, v, t) -> (n,)``, optional
@@ -117,16 +122,13 @@ def from_urdf(
     g = number(f"from_urdf: g must be a finite number (gravity's magnitude, m/s²), got {g!r}", g)
     if joints is not None and (isinstance(joints, str) or not all(isinstance(j, str) for j in joints)):
         raise InputError(f"from_urdf: joints must be a list of joint names, got {joints!r}")
-    movable = adam_robot.movable_joints(str(path))
-    kinds = dict(movable)
-    names = [name for name, kind in movable if kind in ONE_DOF] if joints is None else list(joints)
+    movable = [name for name, _ in adam_robot.movable_joints(str(path))]  # one coordinate each (_checked_file)
+    names = movable if joints is None else list(joints)
     for name in names:
-        if name not in kinds:
+        if name not in movable:
             raise UnknownNameError(
-                f"from_urdf: joint {name!r} is not a movable joint of {path}; known: {sorted(kinds)}"
+                f"from_urdf: joint {name!r} is not a movable joint of {path}; known: {sorted(movable)}"
             )
-        if kinds[name] not in ONE_DOF:
-            raise InputError(f"from_urdf: joint {name!r} is {kinds[name]!r}; only {', '.join(ONE_DOF)} joints are read")
     if not names:
         raise InputError(f"from_urdf: {path} has no revolute, continuous or prismatic joint")
     robot = adam_robot.AdamRobot(str(path), names, float(g))
@@ -149,6 +151,13 @@ def _checked_file(path: Any) -> str:
         raise InputError(f"from_urdf: cannot read {str(path)!r}: {exc.strerror or exc}") from None
     if root.tag != "robot":
         raise InputError(f"from_urdf: {str(path)!r} is not a URDF file (its root element is <{root.tag}>, not <robot>)")
+    _check_masses(root, str(path))
+    _check_joints(root, str(path))
+    return str(path)
+
+
+def _check_masses(root: Any, path: str) -> None:
+    """Every link's mass a non-negative number, or an error naming the link."""
     for link in root.iter("link"):
         for mass in link.iter("mass"):
             text = mass.get("value")
@@ -158,10 +167,28 @@ def _checked_file(path: Any) -> str:
                 value = float("nan")
             if not value >= 0 or value == float("inf"):  # 0 is a frame's massless link
                 raise InputError(
-                    f"from_urdf: link {link.get('name')!r} of {str(path)!r} has mass {text!r}; a link's mass must be "
+                    f"from_urdf: link {link.get('name')!r} of {path!r} has mass {text!r}; a link's mass must be "
                     "a non-negative number (kg)"
                 )
-    return str(path)
+
+
+def _check_joints(root: Any, path: str) -> None:
+    """Every joint of a type :func:`from_urdf` reads (:data:`READ`), or an error naming the joint, its type and
+    what to write instead (``<robot>``'s own joints: a ``<transmission>``'s joint references have no type)."""
+    fixes = {
+        "planar": "write it as two prismatic joints and a revolute one through massless links, or make it 'fixed'",
+        "floating": "from_urdf builds fixed-base robots: make it 'fixed'",
+    }
+    for joint in root.findall("joint"):
+        kind = joint.get("type")
+        if kind in READ:
+            continue
+        what = "which adam-robotics does not model" if kind in UNREAD else "which is not a URDF joint type"
+        fix = fixes.get(str(kind), "give it one of these types")
+        raise InputError(
+            f"from_urdf: joint {joint.get('name')!r} of {path!r} has type {kind!r}, {what}; from_urdf reads "
+            f"{', '.join(READ)} joints: {fix}"
+        )
 
 
 def _robot(mech: Any, frame: str) -> Any:

@@ -276,6 +276,7 @@ class _Builder:
         mujoco.mj_kinematics(m, self.d)  # the reference configuration qpos0
         self.problems: list[str] = []
         self.carrier: dict[int, str | None] = {0: None}
+        self.refused: set[int] = set()  # bodies refused with a problem listed (no gausspp body carries them)
         self.frames: dict[str, tuple[np.ndarray, np.ndarray]] = {}  # gausspp body → (r₀, R₀)
         self.rows: dict[str, tuple[str, ...]] = {}
         self.size = 1.0 + float(np.max(np.abs(self.d.xpos), initial=0.0))
@@ -311,11 +312,10 @@ class _Builder:
         self.mb = Multibody(gravity=tuple(gravity))
         self.check_forces()
         ids = self.add_bodies()
-        if not self.problems:
-            for i in range(1, m.nbody):
-                if self.carrier[i] is not None and (m.body_mass[i] > 0 or m.body_jntnum[i] > 0):
-                    self.add_joints(i)
-            self.add_equalities()
+        for i in range(1, m.nbody):  # every problem at once: the bodies' joints and the equalities, whatever else
+            if self.carried(i) is not None and (m.body_mass[i] > 0 or m.body_jntnum[i] > 0):
+                self.add_joints(i)
+        self.add_equalities()
         if self.problems:
             listed = "\n".join(f"  - {p}" for p in self.problems)
             raise InputError(f"from_mjcf: the model has what gausspp's Multibody cannot map:\n{listed}")
@@ -420,7 +420,7 @@ class _Builder:
             name, parent = self.body_name(i), int(m.body_parentid[i])
             if m.body_mocapid[i] >= 0:
                 self.problems.append(f"body {name!r} is a mocap body (moved by the user at run time)")
-                self.carrier[i] = None
+                self.refused.add(i)
             elif m.body_weldid[i] == 0:
                 self.carrier[i] = None  # static: part of the ground
             elif m.body_mass[i] > 0:
@@ -430,18 +430,22 @@ class _Builder:
                         f"body {name!r} has mass {m.body_mass[i]:g} but principal moments {moments.tolist()}: a "
                         "spatial body needs a positive-definite inertia"
                     )
+                    self.refused.add(i)
                     continue
                 r0, p0 = np.array(d.xipos[i]), _inertial_quaternion(self.mj, m, d, i)
                 try:
                     self.mb.body(name, mass=float(m.body_mass[i]), inertia=moments, at=r0, orientation=p0)
                 except InputError as exc:
                     self.problems.append(f"body {name!r}: {exc}")
+                    self.refused.add(i)
                     continue
                 self.carrier[i] = name
                 self.frames[name] = (r0, np.array(d.ximat[i]).reshape(3, 3))
                 ids.append(i)
-            elif m.body_jntnum[i] == 0:
-                self.carrier[i] = self.carrier.get(parent)  # massless, welded: carried by its parent's body
+            elif m.body_jntnum[i] == 0:  # massless, welded: carried by its parent's body (refused with it)
+                self.carrier[i] = self.carrier.get(parent)
+                if parent in self.refused:
+                    self.refused.add(i)
             else:  # massless with joints: carried by the first massive body rigidly attached to it
                 group = [k for k in range(i + 1, m.nbody) if m.body_weldid[k] == i and m.body_mass[k] > 0]
                 if group:
@@ -452,8 +456,17 @@ class _Builder:
                         f"body {name!r} has zero mass but joints {joints}, and nothing with mass is welded to it: a "
                         "moving body needs mass and inertia (give it an <inertial>)"
                     )
-                    self.carrier[i] = None
+                    self.refused.add(i)
         return ids
+
+    def lost(self, i: int) -> bool:
+        """Whether MuJoCo's body ``i`` is carried by no body gausspp built (refused: a problem listed names it)."""
+        return i in self.refused or self.carrier.get(i) not in (None, *self.frames)
+
+    def carried(self, i: int) -> str | None:
+        """The gausspp body carrying MuJoCo's body ``i``; ``None`` for the ground, and for a body :meth:`lost`, so
+        that the joints of its children are still read and their problems listed with the others."""
+        return None if self.lost(i) else self.carrier.get(i)
 
     def joints_of(self, i: int) -> range:
         return range(int(self.m.body_jntadr[i]), int(self.m.body_jntadr[i] + self.m.body_jntnum[i]))
@@ -469,15 +482,20 @@ class _Builder:
         return np.array(axis, float) if body is None else self.frames[body][1].T @ np.asarray(axis, float)
 
     def record(self, key: str, add: Any) -> None:
-        """Run ``add()`` (a Multibody joint) and remember the names of the rows it made under ``key``."""
+        """Run ``add()`` (a Multibody joint) and remember the names of the rows it made under ``key``; a joint the
+        Multibody refuses is a problem listed with the others."""
         before = len(self.mb.constraints)
-        add()
+        try:
+            add()
+        except InputError as exc:
+            self.problems.append(f"{key}: {exc}")
+            return
         self.rows[key] = tuple(c.name or "" for c in self.mb.constraints[before:])
 
     # -- joints ---------------------------------------------------------------------------------------------
     def add_joints(self, i: int) -> None:
         m, d, mb, mj = self.m, self.d, self.mb, self.mj
-        child, parent = self.carrier[i], self.carrier[int(m.body_parentid[i])]
+        child, parent = self.carried(i), self.carried(int(m.body_parentid[i]))
         assert child is not None
         joints = list(self.joints_of(i))
         kinds = [int(m.jnt_type[j]) for j in joints]
@@ -543,7 +561,9 @@ class _Builder:
                 self.problems.append(f"equality {name!r} is inactive at the start (MuJoCo switches it at run time)")
                 continue
             pos1, pos2, b1, b2 = self.anchors(e)
-            a, b = self.carrier[b1], self.carrier[b2]
+            if self.lost(b1) or self.lost(b2):  # the body's problem is listed; this equality's would follow from it
+                continue
+            a, b = self.carried(b1), self.carried(b2)
             if a == b:
                 self.problems.append(
                     f"equality {name!r} joins {self.body_name(b1)!r} and {self.body_name(b2)!r}, which move as one "

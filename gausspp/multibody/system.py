@@ -42,6 +42,8 @@ from .front_end import Bodies
 ASSEMBLY_TOL = 1e-14
 #: ... or gives up after this many iterations.
 ASSEMBLY_ITERATIONS = 60
+#: A spatial body's orientation unless given: the identity quaternion ``(w, x, y, z)``.
+UPRIGHT = (1.0, 0.0, 0.0, 0.0)
 
 
 class Multibody:
@@ -67,8 +69,8 @@ class Multibody:
         mass: float,
         inertia: Any,
         at: Any,
-        angle: float = 0.0,
-        orientation: Any = (1.0, 0.0, 0.0, 0.0),
+        angle: float | None = None,
+        orientation: Any = None,
         load: Callable[..., Any] | None = None,
     ) -> str:
         """Add a body; returns its name (what the joints take).
@@ -84,9 +86,9 @@ class Multibody:
         at : 2 or 3 numbers
             The centre of mass (m): exact or a guess for :meth:`assemble`.
         angle : float
-            Planar: the body's angle (rad), exact or a guess.
+            Planar only: the body's angle (rad), exact or a guess; default 0.
         orientation : 4 numbers
-            Spatial: the unit quaternion ``(w, x, y, z)`` body → space, exact or a guess.
+            Spatial only: the unit quaternion ``(w, x, y, z)`` body → space, exact or a guess; default ``(1, 0, 0, 0)``.
         load : callable ``(r, R, v, t) -> (3,)`` or ``(6,)``, optional
             Applied force on the centre of mass (space axes) and torque (planar: a scalar; spatial: body axes).
         """
@@ -94,16 +96,46 @@ class Multibody:
             raise InputError(f"Multibody.body: name must be a non-empty string, got {name!r}")
         if name in self._bodies:
             raise InputError(f"Multibody.body: a body {name!r} exists already")
+        self._check_pose(name, angle, orientation)
         made = (
-            planar_body(name, mass, inertia, at, angle, load)
+            planar_body(name, mass, inertia, at, 0.0 if angle is None else angle, load)
             if self.planar
-            else spatial_body(name, mass, inertia, at, orientation, load)
+            else spatial_body(name, mass, inertia, at, UPRIGHT if orientation is None else orientation, load)
         )
         q_start = sum(b.nq for b in self._bodies.values())
         v_start = sum(b.nv for b in self._bodies.values())
         self._bodies[name] = replace(made, q_start=q_start, v_start=v_start, points=[])
         self._mechanism = self._assembly = None
         return name
+
+    def _check_pose(self, name: str, angle: Any, orientation: Any) -> None:
+        """A planar body takes ``angle=``, a spatial one ``orientation=``: the other is refused, naming the body."""
+        wrong, kind, right = ("orientation", "planar", "angle") if self.planar else ("angle", "spatial", "orientation")
+        if (orientation if self.planar else angle) is not None:
+            raise InputError(
+                f"Multibody.body {name!r}: {wrong}= is not read for a {kind} body (this machine's gravity has "
+                f"{self.dim} numbers); give {right}= instead"
+            )
+
+    def _pair(self, kind: str, joint: str, a: str | None, b: str | None) -> tuple[Body, Body | None]:
+        """A joint's two bodies: ``a`` a body, ``b`` another body or ``None`` (the ground), or an error naming the
+        joint and the fix."""
+        fix = f"the ground goes second: {kind}({joint!r}, {b!r}, <its point>, None, <the point in space>, ...)"
+        A_ = self._moving(kind, joint, a, fix)
+        if a == b:
+            raise InputError(
+                f"{kind} {joint!r}: joins body {a!r} to itself; join it to another body or to the ground (None)"
+            )
+        return A_, self._body(b, joint)
+
+    def _moving(self, kind: str, joint: str, name: str | None, fix: str) -> Body:
+        """The body ``name`` that ``joint`` moves, or an error naming the joint and ``fix`` (``None``, the ground,
+        does not move)."""
+        if name is None:
+            raise InputError(f"{kind} {joint!r}: the ground (None) is given where a body is needed; {fix}")
+        body = self._body(name, joint)
+        assert body is not None  # a name's body, or UnknownNameError
+        return body
 
     def _body(self, name: str | None, joint: str) -> Body | None:
         if name is None:
@@ -139,8 +171,7 @@ class Multibody:
     ) -> None:
         """Pin the point ``pa`` of body ``a`` to the point ``pb`` of body ``b`` (``None``: the ground, ``pb`` in
         space). Spatial: also the hinge axis, ``axis`` in ``a``'s axes (and ``b``'s at the guess)."""
-        A_, B_ = self._body(a, name), self._body(b, name)
-        assert A_ is not None
+        A_, B_ = self._pair("revolute", name, a, b)
         pa_, pb_ = self._point(name, pa), self._point(name, pb)
         rows = J.coincide(A_, pa_, B_, pb_, self.dim)
         if self.planar and axis is not None:
@@ -156,8 +187,7 @@ class Multibody:
     def prismatic(self, name: str, a: str, pa: Any, b: str | None, pb: Any, axis: Any, realization: Any = None) -> None:
         """Let the point ``pb`` of ``b`` slide along the line through ``pa`` of ``a`` along ``axis`` (``a``'s axes),
         the relative rotation held at the guess."""
-        A_, B_ = self._body(a, name), self._body(b, name)
-        assert A_ is not None
+        A_, B_ = self._pair("prismatic", name, a, b)
         pa_, pb_ = self._point(name, pa), self._point(name, pb)
         e = J.unit(f"prismatic {name!r}", axis, self.dim)
         if self.planar:
@@ -174,8 +204,7 @@ class Multibody:
     def spherical(self, name: str, a: str, pa: Any, b: str | None, pb: Any, realization: Any = None) -> None:
         """A ball joint: the two points coincide (spatial)."""
         self._spatial_only("spherical")
-        A_, B_ = self._body(a, name), self._body(b, name)
-        assert A_ is not None
+        A_, B_ = self._pair("spherical", name, a, b)
         pa_, pb_ = self._point(name, pa), self._point(name, pb)
         self._attach(A_, pa_, B_, pb_)
         self._add("spherical", name, J.coincide(A_, pa_, B_, pb_, 3), realization)
@@ -185,8 +214,7 @@ class Multibody:
     ) -> None:
         """A Hooke joint: the points coincide, ``axis_a`` (in ``a``) and ``axis_b`` (in ``b``) stay perpendicular."""
         self._spatial_only("universal")
-        A_, B_ = self._body(a, name), self._body(b, name)
-        assert A_ is not None
+        A_, B_ = self._pair("universal", name, a, b)
         pa_, pb_ = self._point(name, pa), self._point(name, pb)
         ea, eb = J.unit(f"universal {name!r}", axis_a, 3), J.unit(f"universal {name!r}", axis_b, 3)
         rows = J.coincide(A_, pa_, B_, pb_, 3)
@@ -199,8 +227,7 @@ class Multibody:
     ) -> None:
         """``pb`` of ``b`` on the line through ``pa`` of ``a`` along ``axis``, the axes parallel (slide and turn)."""
         self._spatial_only("cylindrical")
-        A_, B_ = self._body(a, name), self._body(b, name)
-        assert A_ is not None
+        A_, B_ = self._pair("cylindrical", name, a, b)
         pa_, pb_ = self._point(name, pa), self._point(name, pb)
         e = J.unit(f"cylindrical {name!r}", axis, 3)
         rows = J.on_line(A_, pa_, B_, pb_, e) + J.aligned(A_, e, B_, J.relative_rotation(A_, B_).T @ e)
@@ -209,8 +236,7 @@ class Multibody:
 
     def fixed(self, name: str, a: str, pa: Any, b: str | None, pb: Any, realization: Any = None) -> None:
         """Weld: the points coincide and the relative rotation is held at the guess (six rows; planar: three)."""
-        A_, B_ = self._body(a, name), self._body(b, name)
-        assert A_ is not None
+        A_, B_ = self._pair("fixed", name, a, b)
         pa_, pb_ = self._point(name, pa), self._point(name, pb)
         rows = J.coincide(A_, pa_, B_, pb_, self.dim)
         if self.planar:
@@ -223,11 +249,10 @@ class Multibody:
 
     def on_curve(self, name: str, a: str, pa: Any, f: Callable[..., Any], realization: Any = None) -> None:
         """The point ``pa`` of ``a`` on the curve ``f(point, t) = 0`` (planar) or surface (spatial): one row."""
-        A_ = self._body(a, name)
-        assert A_ is not None
+        kind = "curve" if self.planar else "surface"
+        A_ = self._moving(f"on-{kind}", name, a, "give the body whose point it holds")
         pa_ = self._point(name, pa)
         A_.points.append(pa_)
-        kind = "curve" if self.planar else "surface"
         self._add(f"on-{kind}", name, [("f", lambda q, t: f(A_.point(q, pa_), t))], realization)
 
     on_surface = on_curve
@@ -245,8 +270,10 @@ class Multibody:
         says otherwise."""
         if not self.planar:
             raise InputError("Multibody.motor: a spatial motor is not available; drive a revolute's angle in the plane")
-        A_, B_ = self._body(a, name), self._body(b, name)
-        assert B_ is not None
+        B_ = self._moving("motor", name, b, f"the ground goes first: motor({name!r}, None, <body>, law)")
+        if a == b:
+            raise InputError(f"motor {name!r}: turns body {b!r} against itself; give another body or the ground (None)")
+        A_ = self._body(a, name)
 
         def torque_pair(q: Any, v: Any, t: Any) -> Any:  # +1 on θ_b, −1 on θ_a: the motor's torque on each body
             d = np.zeros(v.numel())
@@ -268,8 +295,7 @@ class Multibody:
         servo-constraint on the velocities kept by a torque about that axis (``gp.Force`` along it, Béghin's
         realization) unless ``realization`` says otherwise; the flyball governor's prescribed spin."""
         self._spatial_only("spin")
-        B_ = self._body(body, name)
-        assert B_ is not None
+        B_ = self._moving("spin", name, body, "give the body that spins")
         e = J.unit(f"spin {name!r}", axis, 3)
 
         def along(q: Any, v: Any, t: Any) -> Any:  # the torque's direction: about e on the body

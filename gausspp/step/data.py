@@ -46,7 +46,9 @@ class StepProblem:
     g : (k,) array       holonomic residuals ``g(q, t)`` (0 on other rows)
     qdot : (nq,) array   ``q̇`` from the kinematics
     energy, power : float
-        mechanical energy (0 if the mechanism has none) and power of the non-conservative forces
+        mechanical energy and power of the non-conservative forces; the energy is NaN where it is unknown (a
+        mechanism without energy in :meth:`Model.step_data`, a problem given by hand), though :func:`evaluate`
+        (internal: its values pass the steps' finiteness checks) gives 0 there
     gc, Jc, phic, gdotc : (nc,), (nc, n), (nc,), (nc,) arrays
         the unilateral contacts' gaps, Jacobian, right-hand side and gap rates
     """
@@ -60,7 +62,7 @@ class StepProblem:
     Phi: np.ndarray
     g: np.ndarray = field(default_factory=lambda: np.zeros(0))
     qdot: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    energy: float = 0.0
+    energy: float = float("nan")
     power: float = 0.0
     gc: np.ndarray = field(default_factory=lambda: np.zeros(0))
     Jc: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))

@@ -9,6 +9,7 @@ bounded actuators), and when the compiled QP meets rows that are redundant on th
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import casadi as ca
@@ -123,9 +124,11 @@ def _function(kernel: Kernel) -> ca.Function:
 
 
 def step_problem(model: StepModel, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> StepProblem:
-    """The step's ``A, f = F − h, r₀, J, φ, D, Φ`` as numbers (no checks on their values)."""
+    """The step's ``A, f = F − h, r₀, J, φ, D, Φ`` and what else :class:`StepProblem` carries at the state, as
+    numbers (no checks on their values); the energy NaN where the mechanism has none (the compiled graphs carry 0
+    there, a number their finiteness checks pass)."""
     d = evaluate(model, t, q, v, lam)
-    return StepProblem(A=d.A, f=d.f, r0=d.r0, J=d.J, phi=d.phi, D=d.D, Phi=d.Phi)
+    return d if model.mechanism.energy is not None else replace(d, energy=float("nan"))
 
 
 def _general(model: StepModel, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, backend: object):
