@@ -207,3 +207,17 @@ def test_every_scale_is_positive_and_finite_at_rest() -> None:
         assert np.all(np.isfinite(values)) and np.all(values > 0)
     assert s.energy_floor(np.array([0.0]))[0] > 0
     assert run_scales_module.CHECK_ROUNDOFF < 1e-8  # the floors stay far below any tolerance a run asks for
+
+
+def test_a_contact_penetrated_by_a_millimetre_is_refused_whatever_a_far_coordinate() -> None:
+    """``gp.simulate_friction`` judges each gap against its own terms: a box's corners 1 mm into the floor are refused
+    with its ``x`` at 2e5 m as at 0 (relative to ``1 + ‖q‖∞`` the tolerance grew to 2 mm and let them in); resting on
+    the floor it starts."""
+    from gausspp.friction import scenes as friction_scenes
+
+    mech, contacts = friction_scenes.box(0.3)
+    for x in (0.0, 2e5):
+        with pytest.raises(gp.InitialDataError, match="penetrate"):
+            gp.simulate_friction(mech, contacts, [x, 0.1 - 1e-3, 0.0], [0.0, 0.0, 0.0], 0.1)
+        run = gp.simulate_friction(mech, contacts, [x, 0.1, 0.0], [0.0, 0.0, 0.0], 0.1)
+        assert run.t[-1] == pytest.approx(0.1)

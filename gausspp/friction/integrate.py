@@ -121,11 +121,13 @@ class _Runner:
     def check_start(self, q: np.ndarray, v: np.ndarray) -> None:
         """Refuse initial data that cannot be stepped (:meth:`ContactKinematics.checked`) or penetrate a contact."""
         gaps = self.kin.checked(q, v, 0.0, self.names).g
-        if np.any(gaps < -CONTACT_TOL * (1.0 + np.abs(q).max())):
-            i = int(np.argmin(gaps))
+        scales = self.kin.gap_scales(q)  # each gap against its own terms: a far coordinate does not excuse it
+        off = gaps < -CONTACT_TOL * scales
+        if np.any(off):
+            i = int(np.flatnonzero(off)[np.argmin(gaps[off])])
             raise InitialDataError(
-                f"initial data penetrate the contact {self.names[i]!r} at t=0: g = {gaps[i]:.3g} < 0; start with "
-                "every gap g ≥ 0"
+                f"initial data penetrate the contact {self.names[i]!r} at t=0: g = {gaps[i]:.3g} < 0 (the gap's own "
+                f"scale {scales[i]:.3g}); start with every gap g ≥ 0"
             )
 
     # -- modes at an event --------------------------------------------------------------------------------------

@@ -74,6 +74,12 @@ class ContactKinematics:
         self.sizes = [(int(x.size1()), int(x.size2())) for x in map(ca.SX, parts)]
         # one flat output: each casadi call from Python, and each output's conversion, costs tens of microseconds
         self.fn = ca.Function("contact_state", [q, v], [ca.vertcat(*[ca.vec(ca.SX(x)) for x in parts])])
+        #: ``q ↦ Σ_j |∂g_i/∂q_j| |q_j|``: the size of the terms each gap adds up (its own scale, :meth:`gap_scales`)
+        self._gap_terms = ca.Function("gap_terms", [q], [ca.mtimes(ca.fabs(ca.jacobian(g, q)), ca.fabs(q))])
+
+    def gap_scales(self, q: np.ndarray) -> np.ndarray:
+        """Each gap's own scale at ``q``: ``Σ_j |∂g_i/∂q_j| |q_j|``, the coordinates it depends on and no other."""
+        return np.asarray(self._gap_terms(q), float).ravel()
 
     def __call__(self, q: np.ndarray, v: np.ndarray) -> ContactState:
         flat = self.fn(q, v).full().ravel()
