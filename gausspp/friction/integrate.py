@@ -137,16 +137,17 @@ class _Runner:
         """The modes from the state ``(q, v)`` (after an impact if a contact closes approaching); a contact whose
         event ``fired`` may not keep the mode that event ended (it sits on that mode's boundary)."""
         st = self.kin.checked(q, v, t, self.names)
-        size = 1.0 + np.abs(q).max(initial=0.0)
-        speed = 1.0 + np.abs(v).max(initial=0.0)
-        touching = [i for i in range(len(self.contacts)) if st.g[i] <= CONTACT_TOL * size]
-        approaching = [i for i in touching if st.gdot[i] < -CONTACT_TOL * speed]
+        size = 1.0 + self.kin.gap_scales(q)  # each gap against its own terms, not the largest coordinate
+        speed = contact_speeds(st, v)  # each contact's own: 1 + the terms of its ġ and slip
+        touching = [i for i in range(len(self.contacts)) if st.g[i] <= CONTACT_TOL * size[i]]
+        approaching = [i for i in touching if st.gdot[i] < -CONTACT_TOL * speed[i]]
         if approaching:
             v = self.impact(t, st, touching, v)
             st = self.kin(q, v)
-        candidates = [i for i in touching if abs(st.gdot[i]) <= CONTACT_TOL * speed * 10]
+            speed = contact_speeds(st, v)
+        candidates = [i for i in touching if abs(st.gdot[i]) <= CONTACT_TOL * speed[i] * 10]
         slipping = {
-            i: st.s[i] / np.linalg.norm(st.s[i]) for i in candidates if np.linalg.norm(st.s[i]) > CONTACT_TOL * speed
+            i: st.s[i] / np.linalg.norm(st.s[i]) for i in candidates if np.linalg.norm(st.s[i]) > CONTACT_TOL * speed[i]
         }
         x0 = np.linalg.solve(st.A, st.f)
         tol = LAW_TOL * (1.0 + np.abs(st.f).max(initial=0.0) + np.abs(x0).max(initial=0.0))
@@ -181,6 +182,14 @@ class _Runner:
             st, self.contacts, touching, {}, x0=v, target_n=target_n, target_t=target_t, t=t, tol=CONTACT_TOL
         )
         return sol.x
+
+
+def contact_speeds(st: Any, v: np.ndarray) -> np.ndarray:
+    """``1 +`` the size of the terms each contact's gap rate and slip add up (``|J_n,i||v|``, ``|J_t,i||v|``): the
+    speed its rate is judged against, not the largest velocity of the whole state."""
+    normal = np.abs(st.Jn) @ np.abs(v) if st.Jn.size else np.zeros(len(st.s))
+    tangent = np.array([float((np.abs(Jt) @ np.abs(v)).max(initial=0.0)) for Jt in st.Jt])
+    return 1.0 + np.maximum(normal, tangent)
 
 
 def simulate_friction(

@@ -89,11 +89,12 @@ def consistent_start(hidden: ca.SX, reach: Reach, t0: float, z_guess: np.ndarray
     e = reach.extended
     c_of = ca.Function("hidden", [e.t, e.z], [hidden, ca.jacobian(hidden, e.z)])
     z = np.array(z_guess, float)
-    scale = 1.0 + np.abs(z).max(initial=0.0)
     for _ in range(50):
         c, J = (np.array(x, float) for x in c_of(t0, z))
         c = c.ravel()
-        if np.abs(c).max(initial=0.0) <= tol * scale:
+        weight = np.abs(J).sum(axis=1)  # each hidden row against the size of the components it depends on
+        scale = 1.0 + np.abs(J) @ np.abs(z) / np.where(weight > 0, weight, 1.0)
+        if np.all(np.abs(c) <= tol * scale):
             return z
         z = z - np.linalg.lstsq(J, c, rcond=None)[0]
     raise InputError(
@@ -154,7 +155,9 @@ def simulate_servo(
 
     grid = np.linspace(t, t_end, 401) if record is None else np.asarray(record, float)
     if np.ndim(atol):  # (q, v) and one value for the chain states
-        atol = np.concatenate([np.asarray(atol, float)[:-1], np.full(z0.size - np.size(atol) + 1, np.asarray(atol)[-1])])
+        atol = np.concatenate(
+            [np.asarray(atol, float)[:-1], np.full(z0.size - np.size(atol) + 1, np.asarray(atol)[-1])]
+        )
     sol = solve_ivp(f, (t, t_end), z0, method="DOP853", rtol=rtol, atol=atol, t_eval=grid)
     Z = sol.y.T
     samples = ca.Function("samples", [e.t, e.z], [force, outputs(model)])  # z starts with the model's own q, v

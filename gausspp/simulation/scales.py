@@ -17,17 +17,19 @@ the whole state (which has nothing to do with a row that does not depend on it),
   ``Ẽ`` (the work of its forces over the coordinates' sizes plus its kinetic energy,
   ``Σ_j |F_j| max(|q_j|, M_q,j) + ½ v₀ᵀAv₀``; ``2 m g L`` for a pendulum hanging at rest):
   ``M_v,j = √(2 Ẽ / A_jj)``. The maxima and sums run over the *part* of the machine the component belongs to — the
-  components joined through the mass matrix or a constraint row (:func:`structure`) — so that a free coordinate far
-  away never enters another part's scales; a part all of whose coordinates start at zero takes
-  ``K_q = 2 T₀ (t_end − t₀)²``, the way its motion goes in the run, and at rest ``max_j F_j² (t_end − t₀)⁴ / A_jj``,
-  the way its forces would take it, else ``max_j A_jj r_j²`` with ``r`` how far a prescribed target takes it. The absolute tolerance is never below
-  ``ROUNDOFF·M`` (else a component at rest, whose error estimate is the round-off of its forces, would shrink the
-  step to nothing), and a recorded residual or energy balance within ``CHECK_ROUNDOFF`` of its floor is round-off,
-  whatever the tolerance; the floors grow with the time elapsed, as round-off accumulates (``a_j = |F_j| / A_jj``:
-  ``M_v + a (t − t₀)``, ``M_q + M_v (t − t₀) + a (t − t₀)²``). A component that starts at zero (to round-off) has
-  no size of its own: it takes the machine's along the motions the constraints allow, ``√(K_q c_j)`` and
-  ``√(2 Ẽ c_j)`` (zero for a component the rows hold: its tolerance is then the round-off floor alone) with ``c_j`` the diagonal of the constrained mobility ``A⁻¹ − A⁻¹Jᵀ(JA⁻¹Jᵀ)⁺JA⁻¹`` (a pendulum's
-  angle moves with ``m L² + I_c``, not with its body's ``I_c`` alone: a metre of arm gives it a radian).
+  components joined through the mass matrix, a constraint row or a force (:func:`structure`) — so that a free
+  coordinate far away never enters another part's scales. A part all of whose coordinates start at zero takes
+  ``K_q = 2 T₀ (t_end − t₀)²``, the way its motion goes in the run; at rest ``max_j F_j² (t_end − t₀)⁴ / A_jj``, the
+  way its forces would take it; else ``max_j A_jj r_j²`` with ``r`` how far a prescribed target takes it.
+  The absolute tolerance is never below ``ROUNDOFF·M`` (else a component at rest, whose error estimate is the
+  round-off of its forces, would shrink the step to nothing), and a recorded residual or energy balance within
+  ``CHECK_ROUNDOFF`` of its floor is round-off, whatever the tolerance; the floors grow with the time elapsed, as
+  round-off accumulates (``a_j = |F_j| / A_jj``: ``M_v + a (t − t₀)``, ``M_q + M_v (t − t₀) + a (t − t₀)²``).
+  A component that starts at zero (to round-off) has no size of its own: it takes the machine's along the motions
+  the constraints allow, ``√(K_q c_j)`` and ``√(2 Ẽ c_j)`` with ``c_j`` the diagonal of the constrained mobility
+  ``A⁻¹ − A⁻¹Jᵀ(JA⁻¹Jᵀ)⁺JA⁻¹`` (a pendulum's angle moves with ``m L² + I_c``, not with its body's ``I_c`` alone: a
+  metre of arm gives it a radian). A component the rows hold has none (its tolerance is the round-off floor alone);
+  one they hold only at this instant (a pendulum's ``x`` with its arm level) takes ``1/A_jj`` for ``c_j``.
 * **Each constraint row's own scale**: ``Σ_j |∂g_i/∂q_j| · max(|q_j|, S_q,j)`` for its position residual and
   ``Σ_j |J_ij| · max(|v_j|, S_v,j)`` for its velocity residual — the size of the terms the row adds up (its
   round-off), over the run (:func:`row_scales`) — and at least how far its explicit time terms move in the run

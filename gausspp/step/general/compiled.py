@@ -51,7 +51,7 @@ from ..protocol import StepModel
 from ..qp import QPBackend, short_name
 from ..qp.casadi_conic import CasadiConic, stdout_silenced
 from . import sparse_pattern
-from .drift import relative_drift
+from .drift import relative_drift, row_size
 from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
@@ -275,10 +275,11 @@ class _Graph:
                 c = ca.solve(G, Jn[K, :] @ Jn[d, :].T) if K else ca.SX(0, 1)
                 w = c * self.norms[d] / self.norms[K] if K else c  # J_d ≈ Σ w_i J_i, unnormalized
                 fit_v = (Phi[d] - (w.T @ Phi[K] if K else 0)) / nrm[d]
-                checks.append(ca.fabs(fit_v) <= REACH_TOL * (1 + ca.mmax(ca.fabs(v))))
+                checks.append(ca.fabs(fit_v) <= REACH_TOL * (1 + row_size(J[d, :], v)))  # the row's own size
                 if d in hol:
                     fit_g = (g[d] - (w.T @ g[K] if K else 0)) / nrm[d]
-                    checks.append(ca.fabs(fit_g) <= REACH_TOL * (1 + ca.mmax(ca.fabs(q))))
+                    q_size = row_size(J[d, :], q) if q.numel() == v.numel() else ca.mmax(ca.fabs(q))
+                    checks.append(ca.fabs(fit_g) <= REACH_TOL * (1 + q_size))
         rows = K + self.T
         if rows:
             # as kept_rows.check_realizable: S against the rows' own Gram matrix (the ideal realization's S), so
