@@ -11,7 +11,9 @@ is stored under a key made of
 * what the function is (``("compiled-step", solver, backend, …)``).
 
 The directory is ``$GAUSSPP_CACHE_DIR`` (default ``~/.cache/gausspp``); ``GAUSSPP_CACHE_DIR=off`` turns the cache off.
-A file that cannot be read is rebuilt and rewritten; a function casadi cannot serialize is simply not stored;
+A file that cannot be read, or that is not the one stored for its key (its signature beside it, ``.key``, names the
+key and the file's bytes: a valid function of another key copied over it is caught), is rebuilt and rewritten; a
+function casadi cannot serialize is simply not stored;
 files are written to a temporary name and renamed, so a process never loads a half-written one.
 """
 
@@ -71,9 +73,9 @@ def cached_function(model: Any, what: Hashable, build: Callable[[], ca.Function]
     folder = directory()
     if folder is None:
         return build()
-    name = hashlib.sha256(repr((source_hash(), fingerprint(model), what)).encode()).hexdigest()[:32]
-    path = folder / f"{name}.casadi"
-    if path.exists():
+    key = hashlib.sha256(repr((source_hash(), fingerprint(model), what)).encode()).hexdigest()
+    path = folder / f"{key[:32]}.casadi"
+    if path.exists() and _signed(path, key):
         try:
             fn = ca.Function.load(str(path))
         except RuntimeError:  # unreadable (another casadi, a damaged file): build it again below
@@ -82,19 +84,41 @@ def cached_function(model: Any, what: Hashable, build: Callable[[], ca.Function]
             counts["loaded"] += 1
             return fn
     fn = build()
-    counts["built" if _store(fn, path) else "not stored"] += 1
+    counts["built" if _store(fn, path, key) else "not stored"] += 1
     return fn
 
 
-def _store(fn: ca.Function, path: Path) -> bool:
-    """Write ``fn`` to ``path`` (through a temporary file); whether it could."""
+def _signature(path: Path) -> Path:
+    return path.with_suffix(".key")
+
+
+def _signed(path: Path, key: str) -> bool:
+    """Whether the file at ``path`` is the one stored for ``key``: its signature beside it names the key and the
+    file's own bytes, so a file of another function copied or renamed over it (valid, but not this one) is
+    rebuilt, never used."""
+    try:
+        stored = _signature(path).read_text().split()
+        content = hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return False
+    return stored == [key, content]
+
+
+def _store(fn: ca.Function, path: Path, key: str) -> bool:
+    """Write ``fn`` to ``path`` (through a temporary file) and its signature beside it; whether it could."""
     partial: Path | None = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         with tempfile.NamedTemporaryFile(dir=path.parent, suffix=".part", delete=False) as tmp:
             partial = Path(tmp.name)
         fn.save(str(partial))
+        content = hashlib.sha256(partial.read_bytes()).hexdigest()
         os.replace(partial, path)
+        partial = None
+        with tempfile.NamedTemporaryFile("w", dir=path.parent, suffix=".part", delete=False) as tmp:
+            tmp.write(f"{key} {content}\n")
+            partial = Path(tmp.name)
+        os.replace(partial, _signature(path))
     except (OSError, RuntimeError):  # read-only home, a plugin casadi cannot serialize: run without the cache
         if partial is not None:
             partial.unlink(missing_ok=True)

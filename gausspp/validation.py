@@ -97,3 +97,24 @@ def inertia_matrix(scene: str, inertia: Any) -> np.ndarray:
     if arr.shape != (3, 3):
         raise ShapeError(f"{scene}: inertia must be 3 principal moments or a 3×3 tensor, got shape {arr.shape}")
     return arr
+
+
+def record_times(owner: str, record: Any, t0: float, t_end: float) -> np.ndarray:
+    """``record`` as a 1-D array of increasing times within ``[t0, t_end]`` (``gp.simulate``, ``simulate_friction``):
+    a time outside the run is refused, never dropped."""
+    times = array(owner, "record", record)
+    if times.ndim != 1 or times.size == 0:
+        raise ShapeError(f"{owner}: record must be a 1-D array of times, got shape {times.shape}")
+    if times.min() < t0 or times.max() > t_end:
+        raise InputError(
+            f"{owner}: record times must lie within [t0, t_end] = [{t0:g}, {t_end:g}], got {times.min():g} … "
+            f"{times.max():g}"
+        )
+    back = np.flatnonzero(np.diff(times) <= 0)
+    if back.size:
+        i = int(back[0])
+        raise InputError(
+            f"{owner}: record times must increase, got record[{i}] = {times[i]:g} then record[{i + 1}] = "
+            f"{times[i + 1]:g}: sort them (np.unique(record) sorts and drops repeats)"
+        )
+    return times

@@ -26,7 +26,7 @@ from ..errors import GaussppError, InitialDataError, InputError, IntegrationErro
 from ..model.mechanism import Mechanism
 from ..model.model import Model
 from ..step.outcome import not_positive_definite
-from ..validation import array, flag, positive
+from ..validation import array, flag, positive, record_times
 from ..workspace import workspace
 from .contact import FrictionContact, as_contacts
 from .fixed_step import Phases, run_phase
@@ -256,9 +256,8 @@ class FrictionOptions:
     def checked(
         cls, t_end: Any, step: Any, codegen: Any, rtol: Any, atol: Any, max_events: Any, record: Any
     ) -> FrictionOptions:
-        times = None if record is None else array("simulate_friction", "record", record).ravel()
-        if times is not None and (np.any(np.diff(times) <= 0) or times.size == 0):
-            raise InputError("simulate_friction: record must be increasing times")
+        t_end = float(positive("t_end", t_end))
+        times = None if record is None else record_times("simulate_friction", record, 0.0, t_end)
         return cls(
             t_end=float(positive("t_end", t_end)),
             step=None if step is None else float(positive("step", step)),

@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError, IntegrationError, LongRunWarning, ShapeError
+from ..errors import InputError, IntegrationError, LongRunWarning
 from ..model.model import Model
-from ..validation import array, number, positive
+from ..validation import number, positive, record_times
 from . import lanes
 from . import methods as _methods
 from .scales import RunScales
@@ -146,21 +146,7 @@ def check_record(record: Any, t0: float, t_end: float) -> Any:
     """``record``: a positive integer (every ``record``-th step) or a 1-D array of times in ``[t0, t_end]``."""
     if np.isscalar(record) or record is None:
         return positive("record", record, integer=True, hint=" (record every k-th step) or an array of times")
-    times = array("simulate", "record", record)
-    if times.ndim != 1 or times.size == 0:
-        raise ShapeError(f"record must be a positive integer or a 1-D array of times, got shape {times.shape}")
-    if times.min() < t0 or times.max() > t_end:
-        raise InputError(
-            f"record times must lie within [t0, t_end] = [{t0:g}, {t_end:g}], got {times.min():g} … {times.max():g}"
-        )
-    back = np.flatnonzero(np.diff(times) <= 0)
-    if back.size:
-        i = int(back[0])
-        raise InputError(
-            f"record times must increase, got record[{i}] = {times[i]:g} then record[{i + 1}] = {times[i + 1]:g}: "
-            "sort them (np.unique(record) sorts and drops repeats)"
-        )
-    return times
+    return record_times("simulate", record, t0, t_end)
 
 
 def check_step_count(

@@ -124,6 +124,12 @@ def save(traj: Any, path: str | os.PathLike[str], attrs: dict[str, Any] | None =
         raise InputError(f"path={str(path)!r}: an empty trajectory cannot be written as netCDF; use a .npz file")
     if path.is_dir():
         raise InputError(f"path={str(path)!r} is a directory: give a file name ending in {suffix}")
+    blocking = next((parent for parent in path.parents if parent.exists() and not parent.is_dir()), None)
+    if blocking is not None:
+        raise InputError(
+            f"path={str(path)!r}: {str(blocking)!r} is a file, not a directory, so nothing can be written under it; "
+            "choose a path in a directory"
+        )
     if path.exists() and not overwrite and not is_trajectory_file(path):
         raise InputError(
             f"path={str(path)!r} exists and is not a trajectory written by Trajectory.save: choose another name, "
@@ -208,7 +214,8 @@ def read(path: str | os.PathLike[str], fields: Collection[str]) -> dict[str, Any
             stored = {key: data[key] for key in data.files}
     except Exception as exc:  # noqa: BLE001 — truncated, empty, not a zip, a .npy array, pickled objects …
         raise InputError(
-            f"path={str(path)!r} is not a readable trajectory file written by Trajectory.save: {_why(exc)}"
+            f"path={str(path)!r} is not a readable trajectory file written by Trajectory.save: {_why(exc)} — "
+            "expected the .npz archive (or .nc netCDF file) that Trajectory.save writes"
         ) from None
     if str(stored.get("format", "")) != FORMAT:
         raise InputError(f"path={str(path)!r} is not a trajectory written by Trajectory.save (no format {FORMAT!r})")
@@ -222,7 +229,7 @@ def _why(exc: Exception) -> str:
     """What is wrong with a file numpy could not read, in a user's words."""
     text = str(exc)
     if "pickle" in text:
-        return "it holds Python objects, which a saved trajectory never does"
+        return "it is not a numpy archive (numpy read it as pickled Python objects: a text file or another format)"
     if isinstance(exc, EOFError) or "No data left" in text:
         return "it is empty"
     if "zip" in text.lower():

@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..errors import InputError, ShapeError
+
 _NO_CONTACT_FORCE = np.zeros(0)
 _NO_CONTACT_FORCE.flags.writeable = False  # empty and read-only: every hot-path result may share it
 _HOT_DEFAULTS = {"contact_force": _NO_CONTACT_FORCE, "tracking_error": 0.0, "saturated": None}
@@ -98,6 +100,15 @@ class StepResult:
         Each is measured against the larger of the two results' norms (``a`` also against the
         free acceleration), so a zero answer compared with round-off gives round-off.
         """
+        if not isinstance(other, StepResult):
+            raise InputError(f"disagreement: compare with another StepResult, got {type(other).__name__}")
+        for name in ("a", "u"):
+            mine, theirs = np.shape(getattr(self, name)), np.shape(getattr(other, name))
+            if mine != theirs:
+                raise ShapeError(
+                    f"disagreement: the other result's {name} has shape {theirs}, this one's {mine}: it is a step of "
+                    "another model — compare two solutions of the same step (e.g. solver='qp' and 'direct')"
+                )
         da = _relative(self.a - other.a, self.a, other.a, self.free_acceleration)
         du = _relative(self.u - other.u, self.u, other.u)
         return max(da, du)

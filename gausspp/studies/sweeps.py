@@ -100,6 +100,8 @@ def grid(**axes: Iterable[Any]) -> list[dict[str, Any]]:
         if not isinstance(axis, Iterable) or isinstance(axis, (str, bytes, dict)):
             raise InputError(f"grid axis {name}={axis!r} must be a list of values, e.g. {name}=[{axis!r}]")
         values.append(list(axis))
+        if not values[-1]:
+            raise InputError(f"grid axis {name}=[] is empty: the grid would have no point; give it at least one value")
     return [dict(zip(names, combo, strict=True)) for combo in itertools.product(*values)]
 
 
@@ -111,7 +113,7 @@ def realizability_task(params: Mapping[str, Any]) -> dict[str, float]:
     ``inertia`` (default ``(1, 2, 3)``) and ``l`` (default ``(1, 1, 1)``).
     Returns ``{"margin": ...}``.
     """
-    lon, lat = math.radians(float(params["lon"])), math.radians(float(params["lat"]))
+    lon, lat = (math.radians(_number(params, key, "realizability_task")) for key in ("lon", "lat"))
     n = (math.cos(lat) * math.cos(lon), math.cos(lat) * math.sin(lon), math.sin(lat))
     margin = servo_margin(params.get("inertia", (1.0, 2.0, 3.0)), params.get("l", (1.0, 1.0, 1.0)), n)
     return {"margin": float(margin)}
@@ -124,6 +126,24 @@ def _max_or_nan(x: np.ndarray) -> float:
     finite = np.asarray(x, dtype=float)
     finite = finite[~np.isnan(finite)]
     return float(np.max(finite)) if finite.size else math.nan
+
+
+_MISSING = object()
+
+
+def _number(params: Mapping[str, Any], key: str, task: str, default: Any = _MISSING) -> float:
+    """``params[key]`` as a float (``default`` if absent); a missing or non-numeric value is a project error naming the
+    task and the parameter."""
+    if key not in params and default is _MISSING:
+        raise InputError(f"{task}: the parameter {key!r} is missing; give it in each point of the sweep")
+    value = params.get(key, default)
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise InputError(f"{task}: the parameter {key}={value!r} must be a number") from None
+    if not math.isfinite(number):
+        raise InputError(f"{task}: the parameter {key}={value!r} must be finite")
+    return number
 
 
 def simulate_task(params: Mapping[str, Any]) -> dict[str, Any]:
@@ -171,24 +191,25 @@ def _simulated(params: Mapping[str, Any]) -> tuple[Scene, Trajectory, bool]:
     scene_params = {k: v for k, v in params.items() if k not in _SIMULATE_KEYS}
     general = str(params.get("scene", "pendulum")) in scenes.names("general")  # contacts, bounds, redundancy
     method = methods.get(str(params.get("method", "DOP853" if general else "rk4")))
-    dt = params.get("dt")
+    dt = _number(params, "dt", "simulate_task") if params.get("dt") is not None else None
     scene = cached_scene(str(params.get("scene", "pendulum")), **scene_params)
-    t_end = float(params.get("t_end", scene.t_end))
+    t_end = _number(params, "t_end", "simulate_task", scene.t_end)
     if dt is None and not method.adaptive:  # as `gausspp run`; an adaptive method chooses its own steps
         dt = t_end / 2000
-    own_data = "q0" not in params and "v0" not in params and float(params.get("v_scale", 1.0)) == 1.0
+    v_scale = _number(params, "v_scale", "simulate_task", 1.0)
+    own_data = "q0" not in params and "v0" not in params and v_scale == 1.0
     q0 = np.asarray(params.get("q0", scene.q0), dtype=float)
-    v0 = float(params.get("v_scale", 1.0)) * np.asarray(params.get("v0", scene.v0), dtype=float)
+    v0 = v_scale * np.asarray(params.get("v0", scene.v0), dtype=float)
     traj = simulate(
         scene.model,
         q0,
         v0,
         t_end,
-        dt=None if dt is None else float(dt),
+        dt=dt,
         method=method.name,
         solver=str(params.get("solver", "qp" if general else "direct")),
-        rtol=float(params.get("rtol", 1e-9)),
-        atol=float(params.get("atol", 1e-12)),
+        rtol=_number(params, "rtol", "simulate_task", 1e-9),
+        atol=_number(params, "atol", "simulate_task", 1e-12),
         lam0=scene.lam0,
     )
     return scene, traj, own_data

@@ -11,6 +11,7 @@ import functools
 
 import casadi as ca
 
+from ...errors import InputError
 from .. import qp
 from ..data import StepProblem
 from ..outcome import Where, evaluation_failed, to_result
@@ -43,6 +44,13 @@ def solve(
 
     Same checks and result as :meth:`Model.step`; constraint rows are named ``row i``.
     """
+    if not isinstance(problem, StepProblem):
+        raise InputError(
+            f"solve: give a gp.StepProblem (gp.StepProblem.create(A, f, J, phi, D) or model.step_data), got "
+            f"{type(problem).__name__}"
+        )
+    # its arrays checked against each other (a problem edited with dataclasses.replace skips create's checks)
+    problem = StepProblem.create(problem.A, problem.f, problem.J, problem.phi, problem.D, problem.r0)
     n, k, m = problem.shape
     check_solver(solver, backend)
     name = qp.get(backend).name if solver == "qp" else None
