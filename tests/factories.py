@@ -30,9 +30,9 @@ def double_pendulum(m1: float = 1.3, m2: float = 0.7, l1: float = 0.9, l2: float
     return gp.Lagrangian(n=2, T=T)
 
 
-def kane_pendulum(g: float = 9.81, damping: float = 0.0) -> gp.SympyModel:
-    """A pendulum (unit mass, unit length) in its angle from the downward x axis, built with sympy's KanesMethod:
-    gravity as a load on the bob, ``damping`` a torque ``−c u`` on the rod; no constraint (needs sympy)."""
+def kane_system(damping: float = 0.0) -> tuple:
+    """A pendulum's sympy ``KanesMethod`` in its angle from the downward x axis, and its constants ``(m, l, g)``:
+    gravity as a load on the bob, ``damping`` a torque ``−c u`` on the rod (needs sympy)."""
     import sympy as sm
     import sympy.physics.mechanics as me
 
@@ -48,4 +48,11 @@ def kane_pendulum(g: float = 9.81, damping: float = 0.0) -> gp.SympyModel:
     kane = me.KanesMethod(frame, q_ind=[q], u_ind=[u], kd_eqs=[q.diff() - u])
     loads = [(bob, m * gravity * frame.x), (rod, -damping * u * frame.z)]
     kane.kanes_equations([me.Particle("p", bob, m)], loads)
+    return kane, (m, l, gravity)
+
+
+def kane_pendulum(g: float = 9.81, damping: float = 0.0) -> gp.SympyModel:
+    """A pendulum (unit mass, unit length) in its angle from the downward x axis, built with sympy's KanesMethod
+    (:func:`kane_system`); no constraint (needs sympy)."""
+    kane, (m, l, gravity) = kane_system(damping)
     return gp.from_sympy(kane, parameters={m: 1.0, l: 1.0, gravity: g})

@@ -16,6 +16,8 @@ import pytest
 import gausspp as gp
 from gausspp.errors import InputError, NonFiniteError, UnknownNameError
 
+from .factories import kane_system
+
 needs = {
     name: pytest.mark.skipif(importlib.util.find_spec(module) is None, reason=f"needs {module}")
     for name, module in (("adam", "adam"), ("sympy", "sympy"), ("mujoco", "mujoco"))
@@ -51,22 +53,8 @@ def test_from_urdf_names_a_joint_of_a_type_it_does_not_read(tmp_path: Path, kind
 
 
 # -- 2. from_sympy: parameters keyed by name ------------------------------------------------------------------
-def _pendulum_kane():
-    import sympy as sm
-    import sympy.physics.mechanics as me
-
-    q, u = me.dynamicsymbols("q u")
-    m, l, g = sm.symbols("m l g")
-    N = me.ReferenceFrame("N")
-    A = N.orientnew("A", "Axis", (q, N.z))
-    A.set_ang_vel(N, u * N.z)
-    O = me.Point("O")
-    O.set_vel(N, 0)
-    P = O.locatenew("P", l * A.x)
-    P.v2pt_theory(O, N, A)
-    kane = me.KanesMethod(N, [q], [u], kd_eqs=[q.diff() - u])
-    kane.kanes_equations([me.Particle("bob", P, m)], [(P, -m * g * N.y)])
-    return kane, (m, l, g)
+def _pendulum_kane() -> tuple:
+    return kane_system()
 
 
 @needs["sympy"]
