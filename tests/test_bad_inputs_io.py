@@ -141,3 +141,31 @@ def test_run_out_naming_an_existing_file_is_refused_without_a_traceback(tmp_path
     assert done.returncode != 0
     assert "is a file" in done.stderr and "Traceback" not in done.stderr
     assert blocker.read_text() == "x"
+
+
+def test_simulate_servo_refuses_record_times_outside_the_run() -> None:
+    """Was scipy's "Values in 't_eval' are not within 't_span'" (a helper's review found this entry point)."""
+    scene = gp.scenes.get("overhead-crane")
+    with pytest.raises(gp.InputError, match=r"simulate_servo: record times must lie within \[t0, t_end\]"):
+        gp.simulate_servo(scene.model, scene.q0, scene.v0, 0.5, record=[0.1, 0.9])
+    assert gp.simulate_servo(scene.model, scene.q0, scene.v0, 0.5, record=[0.1, 0.5]).t.size == 2  # the control
+
+
+def test_a_sweep_log_under_a_regular_file_says_it_is_a_file(tmp_path: Path) -> None:
+    """Was "[Errno 17] File exists"."""
+    blocker = tmp_path / "f.txt"
+    blocker.write_text("x")
+    with pytest.raises(gp.GaussppError, match="f.txt' is a file, not a folder"):
+        sweeps.sweep(sweeps.realizability_task, [{"lon": 0.0, "lat": 0.0}], out=blocker / "x.jsonl")
+
+
+def test_report_out_naming_a_file_is_refused_before_the_study(tmp_path: Path) -> None:
+    """Was refused only after the whole study had run ("cannot write …: File exists")."""
+    blocker = tmp_path / "f.txt"
+    blocker.write_text("x")
+    done = subprocess.run(
+        [sys.executable, "-m", "gausspp.cli", "report", "--out", str(blocker)], capture_output=True, text=True
+    )
+    assert done.returncode != 0 and "is a file" in done.stderr and "Traceback" not in done.stderr
+    assert "runs in" not in done.stdout  # no study was run first
+    assert blocker.read_text() == "x"

@@ -42,13 +42,21 @@ def _print(lines: Iterable[str]) -> None:
         print(line)
 
 
+def _out_folder(out: Path, command: str) -> Path:
+    """``--out`` of a command that writes a folder, refused before the work if a file stands at it or above it."""
+    blocking = next((p for p in (out, *out.parents) if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        raise UsageError(f"--out for {command} is a folder; {str(blocking)!r} is a file: choose another path")
+    return out
+
+
 # -- demo ---------------------------------------------------------------------------------------------
 def demo(args: argparse.Namespace) -> int:
     """Two masses, rod vs servo, and the rigid-body servo: QP vs direct, table and timings; every scene;
     the general Gauss QP's scenes; the teaching figures. The rows run on worker processes; each table
     prints whole as soon as its rows are ready, with a line per finished row (and a bar) on stderr between tables."""
     which = demo_study.backends()
-    plan = demo_run.plan(which, Path(args.out))
+    plan = demo_run.plan(which, _out_folder(Path(args.out), "demo"))
     counts = Counter(task.table for task in plan)
     progress = RowProgress(len(plan), "gausspp demo", enabled=not getattr(args, "quiet", False))
     try:
@@ -94,7 +102,7 @@ def _stability(args: argparse.Namespace, out: Path) -> int:
 
 def report(args: argparse.Namespace) -> int:
     """Work-precision study (or, with --stability, the stability study): table, CSV/JSON, plots."""
-    out = Path(args.out)
+    out = _out_folder(Path(args.out), "report")  # before the study, not after it
     if args.stability:
         return _stability(args, out)
     start = time.perf_counter()
@@ -318,10 +326,7 @@ def _work_precision_out(args: argparse.Namespace) -> Path:
         for solver in args.solvers:
             if solver not in known:
                 raise UsageError(f"--solvers: {solver!r} is unknown; use {', '.join(known)}")
-    out = Path(args.out or "report")
-    if out.exists() and not out.is_dir():
-        raise UsageError(f"--out for work-precision is a directory; {str(out)!r} is a file")
-    return out
+    return _out_folder(Path(args.out or "report"), "work-precision")
 
 
 def _sweep_work_precision(args: argparse.Namespace, executor: Any) -> int:

@@ -30,7 +30,7 @@ from ..errors import InputError, IntegrationError
 from ..model.model import Model
 from ..step.bound import Bound
 from ..step.servo_reach import Reach, find_reach, outputs
-from ..validation import positive
+from ..validation import positive, record_times
 
 
 @dataclass(frozen=True)
@@ -153,7 +153,7 @@ def simulate_servo(
         rhs.eval()
         return rhs.res[0].copy()
 
-    grid = np.linspace(t, t_end, 401) if record is None else np.asarray(record, float)
+    grid = np.linspace(t, t_end, 401) if record is None else record_times("simulate_servo", record, t, t_end)
     if np.ndim(atol):  # (q, v) and one value for the chain states
         atol = np.concatenate(
             [np.asarray(atol, float)[:-1], np.full(z0.size - np.size(atol) + 1, np.asarray(atol)[-1])]

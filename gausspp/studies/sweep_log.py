@@ -82,6 +82,15 @@ def open_log(path: Path | None, name: str) -> TextIO | None:
     """The JSON-lines log opened for appending (its first line names the task), a partial last line cut off."""
     if path is None:
         return None
+    blocking = next((p for p in path.parents if p.exists() and not p.is_dir()), None)
+    if blocking is not None:
+        raise SweepError(
+            f"cannot write out={str(path)!r}: {str(blocking)!r} is a file, not a folder; choose a path in a folder"
+        )
+    if path.is_dir():
+        raise SweepError(
+            f"cannot write out={str(path)!r}: it is a folder; give a file name (JSON lines, e.g. sweep.jsonl)"
+        )
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         _cut_partial_line(path)  # a kill's partial last record must not swallow the next one
