@@ -95,8 +95,8 @@ class RunScales:
     floor_lam: np.ndarray
     #: how far each row's explicit time terms move over the run at the initial state: ``max_t |g(q₀, t) − g(q₀, t₀)|``
     #: and the same of ``Φ`` (a prescribed target's excursion; zero for a scleronomic row)
-    target_g: np.ndarray | None = None
-    target_Phi: np.ndarray | None = None
+    target_g: np.ndarray
+    target_Phi: np.ndarray
 
     def atol(self, rtol: float, iterates: bool = False) -> np.ndarray:
         """The absolute tolerance of an adaptive run on ``(q, v, λ)``: ``rtol·S``, not below ``ROUNDOFF·M`` — nor, for
@@ -147,7 +147,8 @@ def run_scales(
     k_q = np.where(k_q > 0, k_q, 2.0 * coupling.part_sum(np.maximum(kinetic, 0.0)) * horizon**2)
     k_q = np.where(k_q > 0, k_q, coupling.part_max(np.nan_to_num(force**2 / diag)) * horizon**4)
     targets = _targets(model, t, q, v, lam, data, horizon)
-    k_q = np.where(k_q > 0, k_q, coupling.part_max(_target_reach(model, t, q, v, lam, targets[0]) ** 2 * mass))
+    reach_g, reach_Phi = _target_reach(model, t, q, v, lam, targets)
+    k_q = np.where(k_q > 0, k_q, coupling.part_max(reach_g**2 * mass))
     mobility = _mobility(A, np.asarray(data.J, float), diag)
     nearby = _mobility_nearby(model, t, q, lam, data, diag, np.sqrt(k_q.max(initial=0.0)))
     # held at this instant only (moves a little way on): the machine's size unconstrained, 1/A_jj
@@ -155,8 +156,7 @@ def run_scales(
     floor_dq = np.sqrt(k_q / diag)
     reach = np.maximum(q_v, floor_dq)
     energy = coupling.part_sum(force * reach + np.maximum(kinetic, 0.0))
-    moving = _target_reach(model, t, q, v, lam, targets[1], velocity=True)  # a prescribed target's speed
-    energy = np.where(energy > 0, energy, coupling.part_max(0.5 * mass * moving**2))
+    energy = np.where(energy > 0, energy, coupling.part_max(0.5 * mass * reach_Phi**2))  # a target's speed
     floor_v = np.sqrt(2.0 * energy / diag)
     floor_q = coupling.coordinate_sized(floor_dq)
     accel = force / diag
@@ -212,19 +212,21 @@ def _targets(
 
 
 def _target_reach(
-    model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, moved: np.ndarray, velocity: bool = False
-) -> np.ndarray:
-    """How far a prescribed target takes each velocity component's coordinates (``velocity``: how fast it moves each
-    velocity component): a row's excursion ``moved`` shared by the components it depends on
-    (``moved_i / Σ_j |∂g_i/∂q_j|``, with ``J`` for velocities), the largest over the rows."""
-    if model.k == 0 or not np.any(moved > 0):
-        return np.zeros(model.nv)
-    y = np.concatenate([q, v, lam])[None, :]
-    _, G, J = sensitivities(model, np.array([t]), y, 1)
-    G = (J if velocity else G)[0]
-    per_row = moved / np.where(G.sum(axis=1) > 0, G.sum(axis=1), np.inf)
-    reach = np.max(np.where(G > 0, per_row[:, None], 0.0), axis=0, initial=0.0)
-    return reach if velocity else structure(model).velocity_sized(reach)
+    model: Model, t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray, targets: tuple[np.ndarray, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """How far and how fast prescribed targets move each velocity component: each row's excursion (``targets``:
+    of ``g``, of ``Φ``) shared by the components it depends on (``moved_i / Σ_j |∂g_i/∂q_j|``, with ``J`` for the
+    speeds), the largest over the rows."""
+    moved_g, moved_Phi = targets
+    if model.k == 0 or not (np.any(moved_g > 0) or np.any(moved_Phi > 0)):
+        return np.zeros(model.nv), np.zeros(model.nv)
+    _, G, J = sensitivities(model, np.array([t]), np.concatenate([q, v, lam])[None, :], 1)
+
+    def shared(moved: np.ndarray, D: np.ndarray) -> np.ndarray:
+        per_row = moved / np.where(D.sum(axis=1) > 0, D.sum(axis=1), np.inf)
+        return np.max(np.where(D > 0, per_row[:, None], 0.0), axis=0, initial=0.0)
+
+    return structure(model).velocity_sized(shared(moved_g, G[0])), shared(moved_Phi, J[0])
 
 
 @dataclass(frozen=True)
@@ -437,8 +439,8 @@ def row_scales(
         rows = at == s
         s_g[rows], s_Phi[rows] = q_size[rows] @ G[s].T, v_size[rows] @ J[s].T
         f_g[rows], f_Phi[rows] = floor_q[rows] @ G[s].T, floor_v[rows] @ J[s].T
-    if scales.target_g is not None and scales.target_Phi is not None:  # a prescribed target's own excursion
-        s_g, s_Phi = np.maximum(s_g, scales.target_g[None, :]), np.maximum(s_Phi, scales.target_Phi[None, :])
+    s_g = np.maximum(s_g, scales.target_g[None, :])  # at least a prescribed target's own excursion
+    s_Phi = np.maximum(s_Phi, scales.target_Phi[None, :])
     return s_g, s_Phi, CHECK_ROUNDOFF * f_g, CHECK_ROUNDOFF * f_Phi
 
 

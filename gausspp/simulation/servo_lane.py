@@ -28,7 +28,7 @@ from ..step.servo_reach import actuators_only, higher_reach
 from .inputs import Options
 from .labels import model_labels
 from .recording import failed
-from .scales import ATOL_SHARE, run_scales
+from .scales import ATOL_SHARE, RunScales, run_scales
 from .tolerance import within_tolerance
 from .trajectory import Trajectory
 
@@ -67,11 +67,9 @@ def check_options(opts: Options, stabilize: Any, lam0: Any) -> None:
         raise InputError("index reduction's actuators carry no λ state: pass no lam0")
 
 
-def _scaled_atol(model: Model, q0: Any, v0: Any, opts: Options) -> np.ndarray:
+def _scaled_atol(model: Model, scales: RunScales, opts: Options) -> np.ndarray:
     """``rtol`` times each component's size (:mod:`.scales`) on ``(q, v)``, and for the actuators' chain states the
     same share of the largest generalized force (their derivatives' sizes are not known before the run)."""
-    _t, q, v, lam = model.checked_state(opts.t0, q0, v0, None)
-    scales = run_scales(model, opts.t0, q, v, lam, opts.t_end - opts.t0)
     motion = scales.atol(opts.rtol)
     chain = ATOL_SHARE * opts.rtol * float(np.max(scales.force, initial=0.0))
     return np.concatenate([motion[: model.nq + model.nv], [chain if chain > 0 else float(motion.min(initial=1.0))]])
@@ -80,11 +78,13 @@ def _scaled_atol(model: Model, q0: Any, v0: Any, opts: Options) -> np.ndarray:
 def run_servo(model: Model, q0: Any, v0: Any, opts: Options) -> Trajectory:
     """Index reduction's motion as a :class:`~gausspp.Trajectory` (module docstring); raised per ``opts.throw``."""
     record = None if np.isscalar(opts.record) else np.asarray(opts.record, float)
-    atol = opts.atol if opts.atol is not None else _scaled_atol(model, q0, v0, opts)
+    _t, q, v, lam = model.checked_state(opts.t0, q0, v0, None)
+    scales = run_scales(model, opts.t0, q, v, lam, opts.t_end - opts.t0)  # read once: the tolerances and the verdict
+    atol = opts.atol if opts.atol is not None else _scaled_atol(model, scales, opts)
     servo = simulate_servo(model, q0, v0, opts.t_end, t0=opts.t0, record=record, rtol=opts.rtol, atol=atol)
     traj = _trajectory(model, servo)
     if servo.status == "success":
-        return within_tolerance(model, traj, opts.constraint_tol)
+        return within_tolerance(model, traj, opts.constraint_tol, scales)
     failure = IntegrationError(f"index reduction stopped: {servo.message}")
     traj = failed(traj, failure)
     if opts.throw:
