@@ -126,9 +126,9 @@ def test_plot_imports_no_computing_code() -> None:
 LAYERS = (
     "gausspp.step",
     "gausspp.model",
+    "gausspp.friction",  # frictional contacts, integrated event by event; gp.simulate runs it (friction_lane.py)
     "gausspp.servo",  # index reduction integrates a model of its own; gp.simulate runs it (simulation/servo_lane.py)
     "gausspp.simulation",
-    "gausspp.friction",  # frictional contacts: a mechanism and its contacts, integrated on their own
     "gausspp.scenes",
     "gausspp.verification",
     "gausspp.studies",

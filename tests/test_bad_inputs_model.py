@@ -220,15 +220,15 @@ def test_step_data_energy_is_nan_without_one() -> None:
 # -- 6. from_mjcf: every problem in one message ----------------------------------------------------------------
 DAMPED_AND_UNMAPPABLE = """
 <mujoco model="bad">
-  <option><flag contact="disable"/></option>
   <worldbody>
+    <geom type="plane" size="1 1 0.1"/>
     <body name="a" pos="0 0 1">
-      <joint name="hinge_a" type="hinge" axis="0 0 1" damping="0.5"/>
+      <joint name="hinge_a" type="hinge" axis="0 0 1" damping="0.5" frictionloss="0.1"/>
       <geom type="sphere" size="0.1"/>
       <body name="b" pos="0.5 0 0">
         <joint name="turn" type="hinge" axis="0 1 0"/>
         <joint name="push" type="slide" axis="1 0 0"/>
-        <geom type="sphere" size="0.1"/>
+        <geom name="drum" type="cylinder" size="0.1 0.1"/>
       </body>
     </body>
   </worldbody>
@@ -237,11 +237,14 @@ DAMPED_AND_UNMAPPABLE = """
 
 
 @needs["mujoco"]
-def test_from_mjcf_lists_an_unmappable_joint_set_with_the_other_problems() -> None:
+def test_from_mjcf_lists_every_problem_at_once_and_maps_the_joint_set() -> None:
+    """The body with a hinge and a slide (refused in rounds by the old loader) is mapped now; the joint's
+    frictionloss and the cylinder's contact are listed in one message."""
     from gausspp.multibody.mjcf import from_mjcf
 
     with pytest.raises(InputError) as info:
         from_mjcf(DAMPED_AND_UNMAPPABLE)
     message = str(info.value)
-    assert "'hinge_a'" in message and "damping" in message
-    assert "body 'b'" in message and "'turn'" in message and "'push'" in message
+    assert "'hinge_a'" in message and "frictionloss" in message and "'drum'" in message and "cylinder" in message
+    free = DAMPED_AND_UNMAPPABLE.replace(' frictionloss="0.1"', "")
+    assert from_mjcf(free, contacts="ignore").model.nv == 3

@@ -6,7 +6,7 @@ impact); :func:`gauss_qp_step` solves one step as Gauss's QP over the conceivabl
 friction cone, the independent check of the direct solution (:mod:`.modes`).
 """
 
-from .contact import FrictionContact
+from ..model.friction_contact import FrictionContact
 from .gauss_qp import gauss_qp_step
 from .integrate import simulate_friction
 from .run import FrictionRun

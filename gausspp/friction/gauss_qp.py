@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import BackendUnavailableError
-from .contact import FrictionContact, as_contacts
+from ..model.friction_contact import FrictionContact, as_contacts
 from .kinematics import ContactState
 
 

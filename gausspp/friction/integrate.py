@@ -23,12 +23,12 @@ import casadi as ca
 import numpy as np
 
 from ..errors import GaussppError, InitialDataError, InputError, IntegrationError, NonFiniteError, ShapeError
+from ..model.friction_contact import FrictionContact, as_contacts
 from ..model.mechanism import Mechanism
 from ..model.model import Model
 from ..step.outcome import not_positive_definite
 from ..validation import array, flag, positive, record_times
 from ..workspace import workspace
-from .contact import FrictionContact, as_contacts
 from .fixed_step import Phases, run_phase
 from .kinematics import ContactKinematics, ContactState
 from .modes import OPEN, SLIDE, STICK, Modes, Solution, check_painleve, choose, solve

@@ -16,10 +16,10 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InputError, NonFiniteError
+from ..model.friction_contact import FrictionContact
 from ..model.mechanism import Mechanism
 from ..model.symbolic import evaluate
 from ..step.outcome import not_positive_definite
-from .contact import FrictionContact
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import IntegrationError, PainleveError
-from .contact import FrictionContact
+from ..model.friction_contact import FrictionContact
 from .kinematics import ContactState
 
 OPEN, STICK, SLIDE = "open", "stick", "slide"

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.linalg import qr
 
 from ..c_code import c_function
-from .contact import FrictionContact
+from ..model.friction_contact import FrictionContact
 from .kinematics import ContactKinematics
 from .modes import OPEN, SLIDE, STICK
 

@@ -10,10 +10,10 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from ..model.friction_contact import FrictionContact
 from ..model.mechanism import Lagrangian
 from ..multibody.bodies import spatial_body
 from ..multibody.front_end import Bodies
-from .contact import FrictionContact
 
 G = 9.81
 

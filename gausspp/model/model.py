@@ -76,6 +76,9 @@ class Model:
         The size of some components' motion where the numbers cannot tell it (``gp.Scales(q=[...], v=[...])``,
         ``None`` entries derived): every tolerance of a run is measured against scales read from the machine at
         its start (:mod:`gausspp.simulation.scales`); a declared size replaces the one read.
+    friction : gp.FrictionContact or list of them, optional
+        Hard contacts with Coulomb friction (:mod:`gausspp.friction`): ``gp.simulate`` integrates them event by
+        event (its friction lane, :func:`gausspp.simulate_friction`). Kept as ``model.friction`` (a tuple).
 
     Attributes
     ----------
@@ -107,6 +110,7 @@ class Model:
         route: str = "auto",
         codegen: bool = False,
         scales: Scales | dict[str, Any] | None = None,
+        friction: Any = (),
     ) -> None:
         if not isinstance(mechanism, Mechanism):
             raise InputError(f"mechanism must be a Lagrangian, RigidBody or MassMatrix, got {type(mechanism).__name__}")
@@ -153,6 +157,7 @@ class Model:
         self.has_force_power = mechanism.F_nc is not None
         #: the sizes the model declares (:class:`~gausspp.Scales`); ``None``: every scale read from the run's start
         self.scales = check_scales(scales, self.nq, self.nv)
+        self.friction = _friction_contacts(friction)
         self._sealed = True
 
     def __setattr__(self, name: str, value: Any) -> None:
@@ -400,3 +405,12 @@ def model_argument(owner: str, model: Any) -> None:
     if not isinstance(model, Model):
         hint = " (a scene carries one: gp.scenes.get(name).model)"
         raise InputError(f"{owner}: model must be a gp.Model{hint}, got {short(model)}")
+
+
+def _friction_contacts(friction: Any) -> tuple[Any, ...]:
+    """``friction`` as a tuple of :class:`gausspp.FrictionContact` (none: empty), or an error naming the argument."""
+    if friction is None or (not hasattr(friction, "gap") and hasattr(friction, "__len__") and len(friction) == 0):
+        return ()
+    from .friction_contact import as_contacts
+
+    return tuple(as_contacts("Model: friction", friction))

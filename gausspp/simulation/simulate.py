@@ -124,6 +124,15 @@ def simulate(
     -------
     Trajectory
     """
+    if model.friction:  # frictional contacts: the friction lane (simulate_friction), its run as a Trajectory
+        from . import friction_lane
+
+        friction_lane.check_friction_options(
+            model, method=method, stabilize=stabilize, lam0=lam0, backend=backend, lane=lane
+        )
+        return friction_lane.run_friction(
+            model, q0, v0, t_end, dt=dt, rtol=rtol, atol=atol, record=record, throw=throw, max_events=max_events
+        )
     opts = check_options(
         model,
         method=method,

@@ -76,6 +76,12 @@ class Trajectory:
     gap : (N, n_contact_rows) array
         The gap ``g(q, t)`` of every unilateral contact row at each sample (≥ 0 up to the integration
         tolerance; 0 while a contact is closed); empty second axis without contacts.
+    friction_force, slip : (N, n_slip) arrays
+        Frictional contacts only (the ``"friction"`` lane): each contact's friction force and slip velocity, one
+        column per slip component, contacts in order (``contact_force`` holds their normal forces, ``gap`` their
+        gaps); empty second axis otherwise.
+    modes : tuple of tuples of str
+        Frictional contacts only: each contact's mode at each sample (``"open"``, ``"stick"``, ``"slide"``).
     """
 
     t: np.ndarray
@@ -103,6 +109,9 @@ class Trajectory:
     saturated: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=bool))
     events: tuple[dict[str, Any], ...] = ()
     gap: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    friction_force: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    slip: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    modes: tuple[tuple[str, ...], ...] = ()
     lane: str = ""
     route: str = ""
     labels: Labels = field(default_factory=Labels)

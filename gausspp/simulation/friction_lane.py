@@ -1,0 +1,100 @@
+"""``gp.simulate`` of a model with frictional contacts (``gp.Model(..., friction=[...])``, ``gp.from_mjcf``): the
+friction lane, :func:`gausspp.simulate_friction` event by event, its run returned as a :class:`Trajectory`.
+
+The model's one-sided rows (``gp.Unilateral``: a joint's range, …) join the frictional contacts as frictionless ones
+(``μ = 0``, no slip), so that one event loop keeps them all. The trajectory holds the state, the energy, each
+contact's gap, normal force (``contact_force``), friction force and slip (one column per slip component) and mode,
+and the events (impacts, stick, slip, lift-off); the step's quantities of the other lanes (accelerations,
+reactions, compulsion, margin, works) are not computed here: NaN. Bilateral rows are refused by name (the friction
+lane integrates a mechanism without them), as are the options it does not take.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+from ..errors import GaussppError, InputError
+from ..model.friction_contact import FrictionContact
+from ..model.model import Model
+from .trajectory import Trajectory
+
+
+def check_friction_options(model: Model, **given: Any) -> None:
+    """Refuse, by name, what the friction lane does not do."""
+    if model.k:
+        raise InputError(
+            f"gp.simulate: a model with frictional contacts and bilateral rows ({', '.join(model.names)}) is not "
+            "integrated yet: the friction lane takes a mechanism with contacts and one-sided rows only"
+        )
+    for name, value in given.items():
+        if value is not None:
+            raise InputError(f"gp.simulate: {name}={value!r} is not taken by the friction lane (frictional contacts)")
+
+
+def _limit_contacts(model: Model) -> list[FrictionContact]:
+    """Each one-sided row of the model as a frictionless contact with no slip."""
+    mech = model.mechanism
+    out = []
+    for c, name in zip(model.contacts, model.contact_names, strict=True):
+        rows = ca.SX(c.value(mech.q, mech.t))
+        if ca.depends_on(rows, mech.t):
+            raise InputError(f"gp.simulate: the one-sided row {name!r} depends on time: not taken with friction")
+        for i in range(rows.numel()):
+            fn = ca.Function("g", [mech.q], [rows[i]])
+            label = name if rows.numel() == 1 else f"{name}[{i}]"
+            out.append(
+                FrictionContact(
+                    gap=lambda q, fn=fn: fn(q),
+                    slip=lambda q, v: 0 * v[0],
+                    mu=0.0,
+                    name=label,
+                    restitution=c.restitution,
+                )  # fmt: skip
+            )
+    return out
+
+
+def run_friction(
+    model: Model, q0: Any, v0: Any, t_end: float, *, dt: float | None, rtol: float, atol: float | None, record: Any,
+    throw: bool, max_events: int,
+) -> Trajectory:  # fmt: skip
+    from ..friction.integrate import simulate_friction
+
+    contacts = [*model.friction, *_limit_contacts(model)]
+    times = None if isinstance(record, (int, np.integer)) else record
+    options: dict[str, Any] = {"rtol": rtol, "max_events": max_events, "record": times, "step": dt, "throw": False}
+    if atol is not None:
+        options["atol"] = atol
+    run = simulate_friction(model.mechanism, contacts, q0, v0, t_end, **options)
+    traj = _trajectory(model, contacts, run, dt)
+    if run.failure is not None and throw:
+        exc = run.failure
+        if isinstance(exc, GaussppError):
+            exc.trajectory = traj  # type: ignore[attr-defined]
+        raise exc
+    return traj
+
+
+def _trajectory(model: Model, contacts: list[FrictionContact], run: Any, dt: float | None) -> Trajectory:
+    mech = model.mechanism
+    n = run.t.size
+    gaps = ca.vertcat(*[ca.SX(c.gap(mech.q)) for c in contacts])
+    slips = ca.vertcat(*[ca.SX(c.slip(mech.q, mech.v)) for c in contacts])
+    measure = ca.Function("measure", [mech.q, mech.v], [gaps, slips])
+    if n:
+        g, s = measure.map(n)(run.q.T, run.v.T)
+        g, s = np.array(g).T, np.array(s).T
+    else:
+        g, s = np.zeros((0, len(contacts))), np.zeros((0, int(slips.numel())))
+    nan = np.full(n, np.nan)
+    return Trajectory(
+        t=run.t, q=run.q, v=run.v, lam=np.zeros((n, 0)), a=np.full((n, model.nv), np.nan), u=np.zeros((n, 0)),
+        reaction=np.full((n, model.nv), np.nan), compulsion=nan, residual=np.zeros((n, 0)), g=np.zeros((n, 0)),
+        margin=nan, energy=run.energy, work_reaction=nan.copy(), work_forces=nan.copy(), status=run.status,
+        message=run.message, method="DOP853" if dt is None else "rk4", solver="friction", steps=n, rhs_evaluations=0,
+        contact_force=run.N, events=tuple(run.events), gap=g, friction_force=run.F, slip=s,
+        modes=tuple(tuple(m) for m in run.modes), lane="friction", failure=run.failure,
+    )  # fmt: skip
