@@ -37,6 +37,9 @@ from .run import FrictionRun, Record
 
 #: Relative tolerance of "on the contact" and "not slipping" at an event, and of the laws' inequalities.
 CONTACT_TOL = 1e-8
+#: A phase that starts with a contact on its event's boundary to round-off watches it from this far below zero,
+#: relative to the gap's own terms (a gap) or the forces' scale (a normal force): :meth:`_Runner.events`.
+TIE = 1e-11
 #: The laws' inequalities (``N ≥ 0``, ``|F| ≤ μ_s N``, ``g̈ ≥ 0``) hold to this, relative to the forces' scale.
 LAW_TOL = 1e-12
 
@@ -49,6 +52,8 @@ class _Runner:
         self.qdot = ca.Function("qdot", [mechanism.q, mechanism.v], [mechanism.qdot])
         self.names = [c.name for c in contacts]
         self.phases = Phases(self)
+        self._last: tuple[Modes, bytes, ContactState, Solution] | None = None
+        self._gaps: tuple[bytes, np.ndarray] | None = None
 
     # -- one state --------------------------------------------------------------------------------------------
     def split(self, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -93,13 +98,35 @@ class _Runner:
         stiff = any(k == SLIDE and self.kin.dims[i] > 1 for i, k in enumerate(modes.kinds))
         return "Radau" if stiff else "DOP853"
 
-    def events(self, modes: Modes) -> list[Any]:
-        out = []
+    def events(self, modes: Modes, y: np.ndarray | None = None) -> list[Any]:
+        """The phase's events. A contact that starts the phase on its event's boundary — open with its gap at zero
+        to round-off, closed with its normal force at zero to round-off (a tie: the same motion whether it is
+        closed or open, as a free-falling machine's joint at its limit) — is watched from a band below zero
+        (:data:`TIE`, against the gap's own terms or the forces' scale), so that round-off does not end the phase
+        where it starts; a real approach or pull crosses the band at once (a penetration below ``TIE`` of the
+        gap's scale)."""
+        gap_band = np.zeros(len(self.contacts))
+        force_band = np.zeros(len(self.contacts))
+        if y is not None:
+            q, v = self.split(y)
+            st = self.kin(q, v)
+            sol = self.accel(st, modes, v)
+            size = 1.0 + self.kin.gap_scales(q)
+            force = 1.0 + float(np.abs(st.f).max(initial=0.0)) + float(np.abs(sol.N).max(initial=0.0))
+            for i, kind in enumerate(modes.kinds):
+                if kind == OPEN and abs(st.g[i]) <= TIE * size[i]:
+                    gap_band[i] = TIE * size[i]
+                elif kind != OPEN and abs(sol.N[i]) <= TIE * force:
+                    force_band[i] = TIE * force
+        opened = [i for i, kind in enumerate(modes.kinds) if kind == OPEN]
+        out = [self._gap_event(opened, gap_band[opened])] if opened else []
         for i, kind in enumerate(modes.kinds):
             if kind == OPEN:
-                out.append(self._event(modes, lambda st, sol, i=i: st.g[i], ("closes", i)))
+                continue
             else:
-                out.append(self._event(modes, lambda st, sol, i=i: sol.N[i], ("lifts off", i)))
+                out.append(self._event(modes, lambda st, sol, i=i, b=force_band[i]: sol.N[i] + b, ("lifts off", i)))
+            if self.contacts[i].mu_static == 0.0:  # frictionless: its slip changes nothing
+                continue
             if kind == SLIDE:  # the slip along the phase's first direction reaches zero
                 d = modes.dirs[i]
                 out.append(self._event(modes, lambda st, sol, i=i, d=d: float(d @ st.s[i]), ("stops slipping", i)))
@@ -109,14 +136,42 @@ class _Runner:
                 out.append(self._event(modes, cone, ("starts to slip", i)))
         return out
 
+    def _gap_event(self, opened: list[int], band: np.ndarray) -> Any:
+        """The first of the open contacts ``opened`` closes: the least of their gaps (each plus the phase's start
+        band) falls through zero — one event for them all, from the gaps alone (one root to locate, not one per
+        contact); :meth:`closing` names the contact at the event's state."""
+
+        def event(_t: float, y: np.ndarray) -> float:
+            return float(np.min(self._gap_values(y)[opened] + band))
+
+        event.terminal, event.direction = True, -1  # type: ignore[attr-defined]
+        event.what = ("closes", -1)  # type: ignore[attr-defined]
+        event.closing = lambda y: opened[int(np.argmin(self._gap_values(y)[opened] + band))]  # type: ignore[attr-defined]
+        return event
+
+    def _gap_values(self, y: np.ndarray) -> np.ndarray:
+        key = y.tobytes()
+        if self._gaps is None or self._gaps[0] != key:
+            self._gaps = (key, np.asarray(self.kin.gaps(y[: self.nq]), float).ravel())
+        return self._gaps[1]
+
     def _event(self, modes: Modes, value: Any, what: tuple[str, int]) -> Any:
         def event(_t: float, y: np.ndarray) -> float:
-            q, v = self.split(y)
-            st = self.kin(q, v)
-            return float(value(st, self.accel(st, modes, v)))
+            return float(value(*self._state(modes, y)))
 
         event.terminal, event.direction, event.what = True, -1, what  # type: ignore[attr-defined]
         return event
+
+    def _state(self, modes: Modes, y: np.ndarray) -> tuple[ContactState, Solution]:
+        """The contact state and the solution under ``modes`` at ``y``, kept for the next call at the same ``y``
+        (scipy asks every event of a step at the step's end: one evaluation serves them all)."""
+        key = y.tobytes()
+        last = self._last
+        if last is None or last[0] is not modes or last[1] != key:
+            q, v = self.split(y)
+            st = self.kin(q, v)
+            last = self._last = (modes, key, st, self.accel(st, modes, v))
+        return last[2], last[3]
 
     def check_start(self, q: np.ndarray, v: np.ndarray) -> None:
         """Refuse initial data that cannot be stepped (:meth:`ContactKinematics.checked`) or penetrate a contact."""
@@ -226,6 +281,8 @@ def simulate_friction(
     rec = Record(runner.nq, runner.nv, len(runner.contacts), int(sum(runner.kin.dims)))
     events: list[dict[str, Any]] = []
     failure: Exception | None = None
+    if opts.codegen:  # the state's function as C too (the adaptive lane calls it at every stage and event)
+        runner.kin.compile_c()
     try:
         runner.check_start(q, v)
         (_adaptive if opts.step is None else _fixed_step)(runner, q, v, opts=opts, rec=rec, events=events)
@@ -330,7 +387,7 @@ def _adaptive(
     while t < opts.t_end:
         check_painleve(runner.kin(*runner.split(y)), runner.contacts, modes, t)
         _keep(runner, rec, modes, [t], [y])  # the phase's start, kept if the phase fails
-        watched = runner.events(modes)
+        watched = runner.events(modes, y)
         sol = solve_ivp(
             runner.rhs(modes),
             (t, opts.t_end),
@@ -342,6 +399,7 @@ def _adaptive(
             t_eval=None if times is None else np.append(times[(times > t) & (times < opts.t_end)], opts.t_end),
         )
         failed = sol.status == -1
+        sol.t, sol.y = np.atleast_1d(np.asarray(sol.t, float)), np.asarray(sol.y, float).reshape(y.size, -1)
         ends = [(te[0], ye[0]) for te, ye in zip(sol.t_events, sol.y_events, strict=True) if te.size]
         if times is not None:  # the phase's start, the sampled times, then the event's state
             seg_t, seg_y = [t, *sol.t], [y, *sol.y.T]
@@ -355,7 +413,11 @@ def _adaptive(
             raise IntegrationError(f"the integrator failed at t={sol.t[-1]:.6g}: {sol.message}")
         if sol.status == 0:
             return
-        fired = [ev.what for ev, te in zip(watched, sol.t_events, strict=True) if te.size]
+        fired = [
+            ("closes", ev.closing(y)) if ev.what == ("closes", -1) else ev.what
+            for ev, te in zip(watched, sol.t_events, strict=True)
+            if te.size
+        ]
         modes, y = _next_modes(runner, t, y, fired, opts.max_events, events)
 
 

@@ -74,8 +74,19 @@ class ContactKinematics:
         self.sizes = [(int(x.size1()), int(x.size2())) for x in map(ca.SX, parts)]
         # one flat output: each casadi call from Python, and each output's conversion, costs tens of microseconds
         self.fn = ca.Function("contact_state", [q, v], [ca.vertcat(*[ca.vec(ca.SX(x)) for x in parts])])
+        #: ``q ↦ g``: the gaps alone (a closing contact's event asks nothing else)
+        self.gaps = ca.Function("gaps", [q], [g])
         #: ``q ↦ Σ_j |∂g_i/∂q_j| |q_j|``: the size of the terms each gap adds up (its own scale, :meth:`gap_scales`)
         self._gap_terms = ca.Function("gap_terms", [q], [ca.mtimes(ca.fabs(ca.jacobian(g, q)), ca.fabs(q))])
+
+    def compile_c(self) -> None:
+        """Evaluate the state (and the gaps) as C where a compiler is (:mod:`gausspp.c_code`), once."""
+        from ..c_code import c_function
+
+        if not getattr(self, "_c", False):
+            self.fn = c_function(self.fn) or self.fn
+            self.gaps = c_function(self.gaps) or self.gaps
+            self._c = True
 
     def gap_scales(self, q: np.ndarray) -> np.ndarray:
         """Each gap's own scale at ``q``: ``Σ_j |∂g_i/∂q_j| |q_j|``, the coordinates it depends on and no other."""
@@ -109,6 +120,9 @@ class ContactKinematics:
         for what, value in (("the mass matrix A", st.A), ("the forces f", st.f)):
             if not np.all(np.isfinite(value)):
                 raise NonFiniteError(f"{what} is not finite at t={t:.6g}; check the mechanism's formulas there")
+        whole = (st.g, st.gdot, st.Jn, st.phin, *st.s, *st.Jt, *st.phit)
+        if all(np.isfinite(x).all() for x in whole):  # the usual case, checked at once
+            names = []
         for i, name in enumerate(names):
             parts = (st.g[i], st.gdot[i], st.Jn[i], st.phin[i], st.s[i], st.Jt[i], st.phit[i])
             if not all(np.all(np.isfinite(x)) for x in parts):

@@ -183,6 +183,8 @@ def choose(
     for i in range(len(contacts)):
         if i not in candidates:
             options.append((OPEN,))
+        elif contacts[i].mu_static == 0.0:  # frictionless: pushes along its normal (sliding) or lets go
+            options.append((OPEN,) if forced.get(i) == (OPEN,) else (SLIDE, OPEN))
         elif i in slipping:
             options.append((SLIDE, OPEN))
         else:
@@ -225,7 +227,11 @@ def _directions(
     the caller through the sign options), against the sticking friction for two components (``None`` if there
     is none)."""
     dirs: list[np.ndarray | None] = [None] * len(contacts)
-    starting = [i for i, k in enumerate(kinds) if k == SLIDE and i not in slipping]
+    for i, k in enumerate(kinds):  # frictionless: no force along the slip, whatever its direction
+        if k == SLIDE and contacts[i].mu_static == 0.0:
+            n = state.Jt[i].shape[0]
+            dirs[i] = slipping[i] if i in slipping else np.ones(n) / np.sqrt(n)
+    starting = [i for i, k in enumerate(kinds) if k == SLIDE and i not in slipping and dirs[i] is None]
     for i, k in enumerate(kinds):
         if k == SLIDE and i in slipping:
             dirs[i] = slipping[i]

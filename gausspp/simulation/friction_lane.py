@@ -62,10 +62,13 @@ def run_friction(
     throw: bool, max_events: int,
 ) -> Trajectory:  # fmt: skip
     from ..friction.integrate import simulate_friction
+    from ..workspace import workspace
 
-    contacts = [*model.friction, *_limit_contacts(model)]
+    contacts = workspace(model).get("friction-lane contacts", lambda: [*model.friction, *_limit_contacts(model)])
     times = None if isinstance(record, (int, np.integer)) else record
-    options: dict[str, Any] = {"rtol": rtol, "max_events": max_events, "record": times, "step": dt, "throw": False}
+    options: dict[str, Any] = {
+        "rtol": rtol, "max_events": max_events, "record": times, "step": dt, "throw": False, "codegen": model.codegen
+    }  # fmt: skip
     if atol is not None:
         options["atol"] = atol
     run = simulate_friction(model.mechanism, contacts, q0, v0, t_end, **options)
@@ -78,12 +81,20 @@ def run_friction(
     return traj
 
 
-def _trajectory(model: Model, contacts: list[FrictionContact], run: Any, dt: float | None) -> Trajectory:
+def _measure(model: Model, contacts: list[FrictionContact]) -> ca.Function:
+    """``(q, v) ↦ (gaps, slips)`` of the contacts."""
     mech = model.mechanism
-    n = run.t.size
     gaps = ca.vertcat(*[ca.SX(c.gap(mech.q)) for c in contacts])
     slips = ca.vertcat(*[ca.SX(c.slip(mech.q, mech.v)) for c in contacts])
-    measure = ca.Function("measure", [mech.q, mech.v], [gaps, slips])
+    return ca.Function("measure", [mech.q, mech.v], [gaps, slips])
+
+
+def _trajectory(model: Model, contacts: list[FrictionContact], run: Any, dt: float | None) -> Trajectory:
+    from ..workspace import workspace
+
+    n = run.t.size
+    measure = workspace(model).get("friction-lane measure", lambda: _measure(model, contacts))
+    slips = measure.sparsity_out(1)
     if n:
         g, s = measure.map(n)(run.q.T, run.v.T)
         g, s = np.array(g).T, np.array(s).T

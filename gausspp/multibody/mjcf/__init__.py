@@ -90,9 +90,16 @@ class MJCFMachine:
         return self.tree.normalize_array(q), v
 
     def initial_state(self) -> tuple[np.ndarray, np.ndarray]:
-        """MuJoCo's reference state: ``qpos0`` and zero velocities."""
+        """MuJoCo's reference state, ``qpos0`` and zero velocities, with each limited hinge or slide moved to the
+        nearest end of its range where ``qpos0`` lies outside it (MuJoCo's soft limit would push it there; gausspp's
+        one-sided rows refuse a start outside them)."""
         m = self.mujoco_model
-        return np.array(m.qpos0, float), np.zeros(m.nv)
+        q = np.array(m.qpos0, float)
+        for j in np.flatnonzero(np.asarray(m.jnt_limited)):
+            if int(m.jnt_type[j]) in (2, 3):
+                a = int(m.jnt_qposadr[j])
+                q[a] = min(max(q[a], float(m.jnt_range[j][0])), float(m.jnt_range[j][1]))
+        return q, np.zeros(m.nv)
 
 
 def from_mjcf(
