@@ -37,8 +37,6 @@ FIXED_UNITS = {
     "andrews": "Andrews' squeezing mechanism: the published SI data are constants of the model, not parameters",
     "ur5-tool-path": "the UR5's masses and lengths come from its URDF, in SI",
     "underactuated-arm": "the arm's masses and lengths come from its URDF, in SI",
-    "two-masses": "the rod's length (1 m) is a constant of the scene, not a parameter",
-    "stiff-chain": "its masses (1 kg) are constants of the scene, not parameters",
 }
 
 
