@@ -34,7 +34,6 @@ UNIT_LIMITS = {
 }
 #: Scenes whose physical constants are not all parameters: they cannot be rewritten in other units here.
 FIXED_UNITS = {
-    "andrews": "Andrews' squeezing mechanism: the published SI data are constants of the model, not parameters",
     "ur5-tool-path": "the UR5's masses and lengths come from its URDF, in SI",
     "underactuated-arm": "the arm's masses and lengths come from its URDF, in SI",
 }
