@@ -3,13 +3,19 @@ when its parameters are rewritten with lengths ×1e3, masses ×1e-3, times ×1e-
 at rest at an equilibrium where it has one, and released 1e-9 … 1e-1 from it.
 
 A scene is rewritten through its parameters, read with their documented units (``gausspp scenes NAME``,
-:mod:`tests.units`); its coordinates' labels give the units to read the motion back in. The negative control: the
+:mod:`tests.units`); its coordinates' labels give the units to read the motion back in. The machines of
+examples/bodies_and_joints.py are rewritten as they are built: their ``gp.Multibody`` takes the example's SI numbers
+and writes them in the other units (:func:`tests.units.multibody_in_units`). The negative control: the
 same comparison with the old absolute tolerance (``atol=1e-10`` in whatever units) fails."""
 
 from __future__ import annotations
 
+import importlib.util
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import numpy as np
@@ -28,17 +34,18 @@ HORIZON = 0.5
 UNIT_OVERRIDES = {("mixed-proportional", "M"): "1/s", ("mixed-rate", "M"): "-"}
 #: Not yet the same in other units: index reduction decides which derivative an actuator reaches by comparing
 #: sensitivities with an absolute threshold (gausspp.step.servo_reach.REACH_TOL·(1 + …)), so in kilometres it
-#: finds no reach and the one-step solution refuses the start. Left open (the closing note of issue 42).
+#: finds no reach and the one-step solution refuses the start. Measured at the sixth derivative, where the force
+#: appears: |∂y⁽⁶⁾/∂w| against max|∂y⁽⁶⁾/∂z| is 16 against 580 in SI, 1.6e12 against 5.8e14 in mm/tonne/hs and
+#: 1.6e-10 against 5.8e-10 in km/g/cs — below 1e-9·(1 + 5.8e-10) there. Their plain ratio is no cure (0.028,
+#: 0.0028, 0.28: it mixes a force's unit with the state's); a unit-free test weighs each column by its component's
+#: size (the state's run scales, the forces' and their chains' derivatives by a time scale). Left open.
 UNIT_LIMITS = {
     "spring-chain-servo": "index reduction's reach test (servo_reach) compares sensitivities of different units",
 }
 #: Scenes whose physical constants are not all parameters: they cannot be rewritten in other units here.
 FIXED_UNITS = {
-    "andrews": "Andrews' squeezing mechanism: the published SI data are constants of the model, not parameters",
     "ur5-tool-path": "the UR5's masses and lengths come from its URDF, in SI",
     "underactuated-arm": "the arm's masses and lengths come from its URDF, in SI",
-    "two-masses": "the rod's length (1 m) is a constant of the scene, not a parameter",
-    "stiff-chain": "its masses (1 kg) are constants of the scene, not parameters",
 }
 
 
@@ -60,9 +67,25 @@ def horizon_params(scene: gp.scenes.Scene, name: str) -> dict[str, Any]:
 @dataclass
 class Run:
     traj: gp.Trajectory
-    q_back: np.ndarray  # the motion read back in the scene's own units
+    q_back: np.ndarray  # the motion read back in the machine's own units
     t_back: np.ndarray
     events: list[tuple[str, float]]
+    spans: list[tuple[float, float] | None]  # the step an event was bridged over (a singular position), else None
+
+
+def recorded(model: gp.Model, q0: Any, v0: Any, t_end: float, lam0: Any = None, **options: Any) -> gp.Trajectory:
+    """The run at the defaults (``options`` aside) to ``t_end``, recorded at 41 instants, not raising."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", gp.DriftWarning)
+        return gp.simulate(model, q0, v0, t_end, lam0=lam0, record=np.linspace(0.0, t_end, 41), throw=False, **options)
+
+
+def read_back(traj: gp.Trajectory, factors: np.ndarray, time: float) -> Run:
+    """A run in other units read back in the original ones: coordinates by their ``factors``, times by ``time``."""
+    timed = [e for e in traj.events if "t" in e]
+    events = [(str(e.get("kind", "")), float(e["t"]) / time) for e in timed]
+    spans = [(float(e["from"]) / time, float(e["to"]) / time) if "from" in e else None for e in timed]
+    return Run(traj, traj.q / factors[None, :], traj.t / time, events, spans)
 
 
 def run_in_units(name: str, params: dict[str, Any], change: tuple[float, float, float] | None, **options: Any) -> Run:
@@ -72,27 +95,8 @@ def run_in_units(name: str, params: dict[str, Any], change: tuple[float, float, 
     scene0 = gp.scenes.get(name, **params)
     scaled = units.rescaled(params, documented_units(name), mass, length, time) if change else params
     scene = gp.scenes.get(name, **scaled)
-    t_end = scene.t_end
-    grid = np.linspace(0.0, t_end, 41)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", gp.DriftWarning)
-        traj = gp.simulate(scene.model, scene.q0, scene.v0, t_end, lam0=scene.lam0, record=grid, throw=False, **options)
-    factors = units.coordinate_factors(scene0.coordinates, mass, length, time)
-    events = [(str(e.get("kind", "")), float(e["t"]) / time) for e in traj.events if "t" in e]
-    return Run(traj, traj.q / factors[None, :], traj.t / time, events)
-
-
-def relative_error(q: np.ndarray, reference: np.ndarray, labels: tuple[str, ...]) -> float:
-    """The largest error of a coordinate over the run, relative to the largest value of the coordinates of its unit
-    (lengths against lengths, angles against angles): the same number in any units."""
-    unit = np.array([label[label.rfind("(") :] for label in labels])
-    error = 0.0
-    for u in set(unit):
-        cols = unit == u
-        size = np.abs(reference[:, cols]).max(initial=0.0)
-        if size > 0:
-            error = max(error, float(np.abs(q[:, cols] - reference[:, cols]).max(initial=0.0) / size))
-    return error
+    traj = recorded(scene.model, scene.q0, scene.v0, scene.t_end, scene.lam0, **options)
+    return read_back(traj, units.coordinate_factors(scene0.coordinates, mass, length, time), time)
 
 
 def reference_motion(name: str, params: dict[str, Any], t: np.ndarray) -> np.ndarray:
@@ -114,16 +118,32 @@ def check_same_in_units(name: str, params: dict[str, Any], **options: Any) -> No
     base = run_in_units(name, params, None, **options)
     reference = reference_motion(name, params, base.t_back)
     labels = gp.scenes.get(name, **params).coordinates
-    error = relative_error(base.q_back, reference, labels)
-    for label, change in CHANGES.items():
-        other = run_in_units(name, params, change, **options)
+    others = {label: run_in_units(name, params, change, **options) for label, change in CHANGES.items()}
+    check_runs_agree(base, others, reference, labels)
+
+
+def check_runs_agree(base: Run, others: dict[str, Run], reference: np.ndarray, labels: tuple[str, ...]) -> None:
+    """Each run of ``others`` (in other units, read back) has ``base``'s status and events, and an error against
+    ``reference`` within 10× of ``base``'s. The events: the same kinds, at the same times to 1e-6 — except a
+    singular position crossed by a bridging step, whose time is the watch's estimate made before the step (off the
+    crossing by a few 1e-3 of it, and it moves with the steps taken before): there each run's estimate lies within the
+    other's bridging step."""
+    error = units.relative_error(base.q_back, reference, labels)
+    for label, other in others.items():
         assert other.traj.status == base.traj.status, f"{label}: {other.traj.message}"
         assert [k for k, _ in other.events] == [k for k, _ in base.events], label
-        np.testing.assert_allclose([t for _, t in other.events], [t for _, t in base.events], rtol=1e-6, atol=1e-9)
+        assert [s is None for s in other.spans] == [s is None for s in base.spans], label
+        for (_, t_other), (_, t_base), s_other, s_base in zip(other.events, base.events, other.spans, base.spans,
+                                                              strict=True):  # fmt: skip
+            if s_base is None:
+                np.testing.assert_allclose(t_other, t_base, rtol=1e-6, atol=1e-9, err_msg=label)
+            else:
+                inside = s_other is not None and s_other[0] < t_base < s_other[1] and s_base[0] < t_other < s_base[1]
+                assert inside, f"{label}: crossed at {t_other:.6g} over {s_other}, against {t_base:.6g} over {s_base}"
         if base.traj.status == "failed":
             continue
         assert other.t_back.size == base.t_back.size
-        other_error = relative_error(other.q_back, reference, labels)
+        other_error = units.relative_error(other.q_back, reference, labels)
         assert other_error <= 10 * max(error, 1e-13), f"{label}: relative error {other_error:.3g} against {error:.3g}"
 
 
@@ -146,6 +166,85 @@ def test_a_unit_dependent_tolerance_fails_the_comparison() -> None:
     scene = gp.scenes.get("pendulum")
     with pytest.raises(AssertionError):
         check_same_in_units("pendulum", horizon_params(scene, "pendulum"), atol=1e-10)
+
+
+# --- the bodies-and-joints examples ------------------------------------------------------------------------
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "bodies_and_joints.py"
+
+
+def example_module(change: tuple[float, float, float] | None) -> ModuleType:
+    """A copy of examples/bodies_and_joints.py whose machines are built in the units of ``change`` (mass, length,
+    time factors): its ``gp`` is gausspp with ``Multibody`` taking the example's SI numbers and rewriting them
+    (:func:`tests.units.multibody_in_units`)."""
+    spec = importlib.util.spec_from_file_location("bodies_and_joints_in_units", EXAMPLE)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    if change is not None:
+        module.gp = units.gausspp_in_units(*change)  # type: ignore[attr-defined]
+    return module
+
+
+#: Machines of the example, each built and assembled as the example does (its SI numbers), released so that the
+#: horizon holds what tells units apart: the four-bar passes a collinear position (an event), the slider-crank
+#: slides on its guide. Not here yet: the flyball governor (41 rows of rank 35, the general route), released as
+#: the example releases it, is at the defaults "drifted" in SI (a link-sleeve row 5e-8 off at t = 0.2), a success
+#: in mm/tonne/hs, and refused in km/g/cs at t = 0.015 (RealizabilityError: rows "dependent and contradict each
+#: other"): the redundant rows' rank and consistency tests are not unit-free yet (and a run takes 7 s).
+MACHINES: dict[str, Callable[[Any], tuple[gp.Multibody, np.ndarray, np.ndarray]]] = {
+    "four-bar": lambda ex: (mb := ex.four_bar(), *mb.assemble(fix={"crank1.θ": 0.3}, rates={"crank1.θ̇": -1.0})),
+    "slider-crank": lambda ex: (mb := ex.slider_crank(), *mb.assemble(fix={"crank.θ": np.pi / 2},
+                                                                      rates={"crank.θ̇": 2.0})),
+}  # fmt: skip
+
+
+def example_in_units(
+    name: str, change: tuple[float, float, float] | None, module: ModuleType | None = None
+) -> tuple[Run, gp.Model]:
+    """The example's machine ``name`` built in the units of ``change`` (by ``module``, the example's copy for
+    ``change`` unless given), run at the defaults over :data:`HORIZON` (in those units), its motion and events read
+    back in SI; and its model."""
+    mass, length, time = change or (1.0, 1.0, 1.0)
+    mb, q0, v0 = MACHINES[name](module or example_module(change))
+    model = mb.model()
+    with warnings.catch_warnings():
+        # the four-bar's last record falls near its collinear position in some runs, where the margin is small
+        warnings.simplefilter("ignore", gp.RealizabilityWarning)
+        traj = recorded(model, q0, v0, HORIZON * time)
+    return read_back(traj, units.multibody_factors(mb.coordinate_names, mass, length, time), time), model
+
+
+def tight_reference(model: gp.Model, base: Run) -> tuple[np.ndarray, tuple[str, ...]]:
+    """The SI machine's motion at rtol 1e-13 on ``base``'s instants, and its coordinates' labels with their units."""
+    tight = recorded(model, base.traj.q[0], base.traj.v[0], HORIZON, rtol=1e-13)
+    assert tight.status == "success" and tight.t.size == base.t_back.size, tight.message
+    labels = tuple(f"{n} ({units.multibody_unit(n)})" for n in model.mechanism.coordinate_names)
+    return tight.q, labels
+
+
+@pytest.mark.parametrize("name", list(MACHINES))
+def test_an_example_of_bodies_and_joints_in_other_units_runs_the_same(name: str) -> None:
+    """The machines of examples/bodies_and_joints.py built from the same SI numbers in other units (gravity as
+    m/s², inertias as kg·m², rates as rad/s …): the same status and events, an error within 10× of SI's."""
+    base, model = example_in_units(name, None)
+    reference, labels = tight_reference(model, base)
+    others = {label: example_in_units(name, change)[0] for label, change in CHANGES.items()}
+    if name == "four-bar":
+        assert [kind for kind, _ in base.events] == ["singular position"]  # what the events' comparison compares
+    check_runs_agree(base, others, reference, labels)
+
+
+def test_an_example_in_other_units_is_rewritten_whole() -> None:
+    """The control of the rewriting: the four-bar in millimetres with its gravity's number a thousandth of SI's (as
+    if it had been left in m/s²) is another motion, which the comparison tells apart."""
+    module = example_module(CHANGES["mm-tonne-hs"])
+    module.G = 9.81e-3  # rewritten to mm/hs² as the rest: a thousand times weaker
+    weak, _ = example_in_units("four-bar", CHANGES["mm-tonne-hs"], module)
+    base, model = example_in_units("four-bar", None)
+    reference, labels = tight_reference(model, base)
+    with pytest.raises(AssertionError, match="weak gravity: crossed at"):
+        check_runs_agree(base, {"weak gravity": weak}, reference, labels)
 
 
 # --- at rest ----------------------------------------------------------------------------------------------------

@@ -204,3 +204,40 @@ def test_qp_gives_the_same_end_state_as_direct(scene: gp.scenes.Scene) -> None:
     assert dv <= 1e-9 * np.max(np.abs(direct.v[-1]))  # measured 3e-11 of |v| = 1.4e3
     assert relative(qp.u[-1], direct.u[-1]) <= 1e-9  # measured 1.3e-13
     assert np.max(np.abs(qp.q[-1] - an.REFERENCE_Q)) <= 3e-9
+
+
+# -- the same mechanism in other units ------------------------------------------------------------
+#: (metre, kilogram, second): millimetres, grams and milliseconds; kilometres, tonnes and hectoseconds.
+OTHER_UNITS = [(1e3, 1e3, 1e3), (1e-3, 1e-3, 1e-2)]
+
+
+@pytest.mark.parametrize(("metre", "kilogram", "second"), OTHER_UNITS)
+def test_in_other_units_it_reaches_the_published_reference_in_those_units(
+    metre: float, kilogram: float, second: float
+) -> None:
+    """Written in other units (every published constant multiplied by its unit's number), the scene starts where
+    the test set starts and reaches its reference at 0.03 s, each read in the scene's own units (``reference``): the
+    angles to the acceptance's 3e-9, the rest as closely as in SI. The control: the SI reference's velocities are
+    not the scaled run's."""
+    scene = gp.scenes.get("andrews", metre=metre, kilogram=kilogram, second=second)
+    start = an.reference(scene, "initial")
+    r = scene.model.step(0.0, scene.q0, scene.v0)
+    assert relative(r.a, start.a) <= 1e-14 and relative(-r.u, start.lam) <= 1e-14  # measured ≤ 5e-16
+    published, converged = an.reference(scene), an.reference(scene, "converged")
+    assert scene.t_end == published.t == pytest.approx(0.03 * second, rel=1e-15)
+    traj = gp.simulate(scene.model, scene.q0, scene.v0, scene.t_end, method="DOP853", rtol=1e-12, record=[scene.t_end])
+    assert traj.success
+    q, v, a, lam = traj.q[-1], traj.v[-1], traj.a[-1], -traj.u[-1]
+    assert np.max(np.abs(q - published.q)) <= 3e-9  # measured 1.43e-9: the published values' own error
+    assert np.max(np.abs(q - converged.q)) <= 1e-10  # measured 9e-12 (8.9e-12 in SI at the same call)
+    assert relative(v, converged.v) <= 1e-10  # measured 2.3e-12, as in SI
+    assert relative(lam, converged.lam) <= 1e-10  # measured 7.5e-12
+    assert relative(a, converged.a) <= 1e-10  # measured 2.0e-11
+    assert relative(v, an.reference(which="converged").v) > 0.5  # the SI reference is another number
+
+
+def test_reference_refuses_an_unknown_state() -> None:
+    with pytest.raises(gp.UnknownNameError, match="which='final'"):
+        an.reference(which="final")
+    with pytest.raises(gp.InputError, match="metre must be a positive number"):
+        gp.scenes.get("andrews", metre=0.0)

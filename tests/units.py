@@ -1,5 +1,6 @@
 """Rewriting a scene in other units: its parameters' documented units (``gausspp scenes NAME``) read as powers of
-kilogram, metre and second, and each value scaled by the factors of a change of units.
+kilogram, metre and second, and each value scaled by the factors of a change of units; and a machine of bodies and
+joints (``gp.Multibody``) built in other units from the same SI numbers (:func:`multibody_in_units`).
 
 Used by the tests of :mod:`gausspp.simulation.scales` (a machine in other units runs with the same status, events
 and relative accuracy)."""
@@ -10,6 +11,8 @@ import re
 from typing import Any
 
 import numpy as np
+
+import gausspp as gp
 
 #: Base units as powers of (kg, m, s); radians and pure numbers are dimensionless.
 BASE = {
@@ -85,3 +88,109 @@ def coordinate_factors(labels: tuple[str, ...], mass: float, length: float, time
             raise ValueError(f"unit of coordinate {label!r} cannot be read")
         out.append(f)
     return np.array(out)
+
+
+def relative_error(q: np.ndarray, reference: np.ndarray, labels: tuple[str, ...]) -> float:
+    """The largest error of a coordinate over the run, relative to the largest value of the coordinates of its unit
+    (lengths against lengths, angles against angles): the same number in any units."""
+    unit = np.array([label[label.rfind("(") :] for label in labels])
+    error = 0.0
+    for u in set(unit):
+        cols = unit == u
+        size = np.abs(reference[:, cols]).max(initial=0.0)
+        if size > 0:
+            error = max(error, float(np.abs(q[:, cols] - reference[:, cols]).max(initial=0.0) / size))
+    return error
+
+
+# --- a machine of bodies and joints in other units -----------------------------------------------------------
+
+#: The unit of each coordinate and each velocity of a ``gp.Multibody`` body, by its name after the body's.
+COORDINATE_UNITS = {**dict.fromkeys(("x", "y", "z"), "m"), **dict.fromkeys(("θ", "qw", "qx", "qy", "qz"), "rad")}
+VELOCITY_UNITS = {**dict.fromkeys(("ẋ", "ẏ", "ż"), "m/s"), **dict.fromkeys(("θ̇", "ωx", "ωy", "ωz"), "rad/s")}
+#: The joints whose third and fifth arguments are points (m): ``kind(name, a, pa, b, pb, ...)``.
+JOINTS = ("revolute", "prismatic", "spherical", "universal", "cylindrical", "fixed")
+
+
+def multibody_unit(name: str) -> str:
+    """The unit of a ``gp.Multibody`` coordinate or velocity from its name: ``"crank1.θ"`` → rad, ``"crank1.θ̇"`` →
+    rad/s."""
+    axis = name.rsplit(".", 1)[1]
+    return COORDINATE_UNITS.get(axis) or VELOCITY_UNITS[axis]
+
+
+def multibody_factors(names: Any, mass: float, length: float, time: float) -> np.ndarray:
+    """The factor of each of a ``gp.Multibody``'s coordinates or velocities from its name's unit."""
+    return np.array([factor(multibody_unit(n), mass, length, time) for n in names], float)
+
+
+def multibody_in_units(mass: float, length: float, time: float) -> type:
+    """A ``gp.Multibody`` that takes every argument in SI and builds the machine with masses' numbers multiplied by
+    ``mass``, lengths' by ``length`` and times' by ``time``: gravity as m/s², masses as kg, inertias as kg·m², the
+    bodies' centres and the joints' points as m, angles, orientations and axes unchanged, a motor's angle law and a
+    spin's rate law read at the SI time (the rate as rad/s), and :meth:`assemble`'s time, held coordinates and rates
+    by their units (a rate held by a coordinate's name: its unit per second). A machine written for ``gp.Multibody``
+    is built in other units by building it with this class instead (:func:`gausspp_in_units`). Loads and curves
+    (functions of the state) are refused."""
+    base = gp.Multibody
+
+    def scaled(unit: str, value: Any) -> Any:
+        f = factor(unit, mass, length, time)
+        assert f is not None, unit
+        return np.asarray(value, float) * f
+
+    def rate_unit(name: str) -> str:
+        axis = name.rsplit(".", 1)[1]
+        return VELOCITY_UNITS.get(axis) or f"{COORDINATE_UNITS[axis]}/s"
+
+    def joint(kind: str) -> Any:
+        def rewritten(self: Any, name: str, a: str, pa: Any, b: str | None, pb: Any, *args: Any, **kw: Any) -> Any:
+            return getattr(base, kind)(self, name, a, scaled("m", pa), b, scaled("m", pb), *args, **kw)
+
+        return rewritten
+
+    class InUnits(base):  # type: ignore[misc, valid-type]
+        def __init__(self, gravity: Any = (0.0, -9.81)) -> None:
+            super().__init__(scaled("m/s²", gravity))
+
+        def body(self, name: str, mass: float, inertia: Any, at: Any, angle: Any = None, orientation: Any = None,
+                 load: Any = None) -> str:  # fmt: skip
+            if load is not None:
+                raise NotImplementedError("multibody_in_units: a load (a function of the state) is not rewritten")
+            return super().body(name, float(scaled("kg", mass)), scaled("kg·m²", inertia), scaled("m", at), angle,
+                                orientation)  # fmt: skip
+
+        def on_curve(self, *args: Any, **kwargs: Any) -> None:
+            raise NotImplementedError("multibody_in_units: a curve (a function of a point) is not rewritten")
+
+        on_surface = on_curve
+
+        def motor(self, name: str, a: str | None, b: str, law: Any, realization: Any = None) -> None:
+            super().motor(name, a, b, lambda t: law(t / time), realization)
+
+        def spin(self, name: str, body: str, axis: Any, law: Any, realization: Any = None) -> None:
+            super().spin(name, body, axis, lambda t: law(t / time) / time, realization)
+
+        def assemble(self, t: float = 0.0, fix: Any = None, rates: Any = None, q: Any = None) -> Any:
+            fix = {k: float(scaled(multibody_unit(k), v)) for k, v in (fix or {}).items()}
+            rates = {k: float(scaled(rate_unit(k), v)) for k, v in (rates or {}).items()}
+            q = None if q is None else np.asarray(q, float) * multibody_factors(self.coordinate_names, mass, length, 1)
+            return super().assemble(t * time, fix, rates, q)
+
+    for kind in JOINTS:
+        setattr(InUnits, kind, joint(kind))
+    return InUnits
+
+
+def gausspp_in_units(mass: float, length: float, time: float) -> Any:
+    """The ``gausspp`` module with its ``Multibody`` rewritten (:func:`multibody_in_units`): what an example
+    module's ``gp`` is replaced by to build its machines in other units."""
+    rewritten = multibody_in_units(mass, length, time)
+
+    class Module:
+        Multibody = rewritten
+
+        def __getattr__(self, name: str) -> Any:
+            return getattr(gp, name)
+
+    return Module()

@@ -39,20 +39,28 @@ extended-precision (long double) solution, derived again apart from gausspp by
 digits), which reproduces them to 14–16 digits. The initial values ``q0, v0 = 0`` and the consistent
 ``q̈(0)`` (:data:`ACCELERATION0`) and ``λ(0)`` (:data:`LAMBDA0`) are the test set's 30-digit values.
 :func:`significant_digits` scores a result as the test set does (``scd``).
+
+Units. Every number above is SI, as published. The scene's parameters ``metre``, ``kilogram`` and ``second`` write
+the same mechanism in other units (``metre=1e3``: millimetres): each constant is multiplied by its unit's number
+(:data:`DIMENSIONS`, :func:`parameters_in`), the angles and the initial state stay as they are, and
+:func:`reference` gives the published states in the scene's units (times as seconds, velocities as 1/s, …).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass
+
 import casadi as ca
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, UnknownNameError
 from ..model.constraints import Holonomic
 from ..model.mechanism import MassMatrix
 from ..model.model import Model
 from .scene import Scene
 
-# -- parameters (SI units), test-set names --------------------------------------------------------
+# -- parameters (SI units, as published), test-set names ----------------------------------------
 m1, m2, m3, m4, m5, m6, m7 = 0.04325, 0.00365, 0.02373, 0.00706, 0.07050, 0.00706, 0.05498
 i1, i2, i3, i4, i5, i6, i7 = 2.194e-6, 4.410e-7, 5.255e-6, 5.667e-7, 1.169e-5, 5.667e-7, 1.912e-5
 xa, ya = -0.06934, -0.00227
@@ -74,6 +82,30 @@ PARAMETERS: dict[str, float] = dict(
     d=d, da=da, e=e, ea=ea, rr=rr, ra=ra, ss=ss, sa=sa, sb=sb, sc=sc, sd=sd,
     ta=ta, tb=tb, u=u, ua=ua, ub=ub, zf=zf, zt=zt, fa=fa,
 )  # fmt: skip
+
+#: Each parameter's dimension as powers of (kg, m, s): masses, moments of inertia, lengths, the spring's stiffness
+#: (N/m) and the driving torque (N·m).
+DIMENSIONS: dict[str, tuple[int, int, int]] = {
+    **{f"m{i}": (1, 0, 0) for i in range(1, 8)},
+    **{f"i{i}": (1, 2, 0) for i in range(1, 8)},
+    **{k: (0, 1, 0) for k in PARAMETERS if k[0] not in "mi" and k not in ("c0", "mom")},
+    "c0": (1, 0, -2),
+    "mom": (1, 2, -2),
+}
+
+
+def _factor(dimension: tuple[int, int, int], metre: float, kilogram: float, second: float) -> float:
+    """The number a quantity of ``dimension`` (powers of kg, m, s) is multiplied by in units where one metre, one
+    kilogram and one second are the numbers ``metre``, ``kilogram`` and ``second``."""
+    kg, m, s = dimension
+    return float(kilogram**kg * metre**m * second**s)
+
+
+def parameters_in(metre: float = 1.0, kilogram: float = 1.0, second: float = 1.0) -> dict[str, float]:
+    """:data:`PARAMETERS` (SI) in units where one metre, one kilogram and one second are the numbers ``metre``,
+    ``kilogram`` and ``second`` (millimetres: ``metre=1e3``)."""
+    return {k: value * _factor(DIMENSIONS[k], metre, kilogram, second) for k, value in PARAMETERS.items()}
+
 
 #: Coordinate names in test-set order (y1..y7).
 COORDINATES = ("beta", "Theta", "gamma", "Phi", "delta", "Omega", "epsilon")
@@ -221,8 +253,12 @@ def significant_digits(q: np.ndarray, reference: np.ndarray = REFERENCE_Q) -> fl
 
 
 # -- the model ------------------------------------------------------------------------------------
-def mass_matrix(q: ca.SX, t: ca.SX | None = None) -> ca.SX:
-    """The test set's 7×7 mass matrix ``M(q)`` (depends on Θ, Φ, Ω)."""
+def mass_matrix(q: ca.SX, t: ca.SX | None = None, p: Mapping[str, float] = PARAMETERS) -> ca.SX:
+    """The test set's 7×7 mass matrix ``M(q)`` (depends on Θ, Φ, Ω), of the parameters ``p`` (SI by default)."""
+    m1, m2, m3, m4, m5, m6, m7 = (p[f"m{i}"] for i in range(1, 8))
+    i1, i2, i3, i4, i5, i6, i7 = (p[f"i{i}"] for i in range(1, 8))
+    e, ea, zf, fa, zt, u = p["e"], p["ea"], p["zf"], p["fa"], p["zt"], p["u"]
+    ra, rr, da, sa, sb, ta, tb, ua, ub = (p[k] for k in ("ra", "rr", "da", "sa", "sb", "ta", "tb", "ua", "ub"))
     th, ph, om = q[1], q[3], q[5]
     ep, zp = e - ea, zf - fa
     M = ca.SX.zeros(7, 7)
@@ -239,8 +275,9 @@ def mass_matrix(q: ca.SX, t: ca.SX | None = None) -> ca.SX:
     return M
 
 
-def _spring(q: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+def _spring(q: ca.SX, p: Mapping[str, float]) -> tuple[ca.SX, ca.SX, ca.SX]:
     """Spring point ``D − C`` on body 3, its length ``L`` and ``∂D/∂γ``."""
+    sc, sd, xb, yb, xc, yc = (p[k] for k in ("sc", "sd", "xb", "yb", "xc", "yc"))
     ga = q[2]
     Dx = sd * ca.cos(ga) + sc * ca.sin(ga) + xb
     Dy = sd * ca.sin(ga) - sc * ca.cos(ga) + yb
@@ -249,12 +286,14 @@ def _spring(q: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
     return rel, ca.norm_2(rel), dD
 
 
-def force(q: ca.SX, v: ca.SX, t: ca.SX | None = None) -> ca.SX:
-    """The test set's force vector ``f(q, q̇)``: torque, spring and velocity-squared terms."""
+def force(q: ca.SX, v: ca.SX, t: ca.SX | None = None, p: Mapping[str, float] = PARAMETERS) -> ca.SX:
+    """The test set's force vector ``f(q, q̇)``: torque, spring and velocity-squared terms (parameters ``p``)."""
+    m2, m4, m6, mom, c0, l0 = p["m2"], p["m4"], p["m6"], p["mom"], p["c0"], p["l0"]
+    e, ea, zf, fa, zt, u, da, rr = (p[k] for k in ("e", "ea", "zf", "fa", "zt", "u", "da", "rr"))
     th, ph, om = q[1], q[3], q[5]
     bep, thp, php, dep, omp, epp = v[0], v[1], v[3], v[4], v[5], v[6]
     ep, zp = e - ea, zf - fa
-    rel, L, dD = _spring(q)
+    rel, L, dD = _spring(q, p)
     F = -c0 * (L - l0) / L * rel
     return ca.vertcat(
         mom - m2 * da * rr * thp * (thp + 2 * bep) * ca.sin(th),
@@ -267,28 +306,31 @@ def force(q: ca.SX, v: ca.SX, t: ca.SX | None = None) -> ca.SX:
     )
 
 
-def _energy(q: ca.SX, v: ca.SX, t: ca.SX) -> ca.SX:
+def _energy(q: ca.SX, v: ca.SX, t: ca.SX, p: Mapping[str, float] = PARAMETERS) -> ca.SX:
     """``½ q̇ᵀ M q̇ + ½ c0 (L − l0)²`` (the torque ``mom`` is the non-conservative force)."""
-    _, L, _ = _spring(q)
-    return 0.5 * ca.dot(v, mass_matrix(q) @ v) + 0.5 * c0 * (L - l0) ** 2
+    _, L, _ = _spring(q, p)
+    return 0.5 * ca.dot(v, mass_matrix(q, t, p) @ v) + 0.5 * p["c0"] * (L - p["l0"]) ** 2
 
 
-def joint_point(q: ca.SX) -> tuple[ca.SX, ca.SX]:
+def joint_point(q: ca.SX, p: Mapping[str, float] = PARAMETERS) -> tuple[ca.SX, ca.SX]:
     """``E(β, Θ)``: the end of body 2, reached from the crank pivot O."""
+    rr, d = p["rr"], p["d"]
     be, th = q[0], q[1]
     return rr * ca.cos(be) - d * ca.cos(be + th), rr * ca.sin(be) - d * ca.sin(be + th)
 
 
-def loop_b(q: ca.SX, t: ca.SX | None = None) -> ca.SX:
+def loop_b(q: ca.SX, t: ca.SX | None = None, p: Mapping[str, float] = PARAMETERS) -> ca.SX:
     """Rows g1, g2: ``E = B + ss (sin γ, −cos γ)``."""
-    Ex, Ey = joint_point(q)
+    ss, xb, yb = p["ss"], p["xb"], p["yb"]
+    Ex, Ey = joint_point(q, p)
     ga = q[2]
     return ca.vertcat(Ex - ss * ca.sin(ga) - xb, Ey + ss * ca.cos(ga) - yb)
 
 
-def loop_a_delta(q: ca.SX, t: ca.SX | None = None) -> ca.SX:
+def loop_a_delta(q: ca.SX, t: ca.SX | None = None, p: Mapping[str, float] = PARAMETERS) -> ca.SX:
     """Rows g3, g4: ``E = A + (e sin(Φ+δ) + zt cos δ, −e cos(Φ+δ) + zt sin δ)``."""
-    Ex, Ey = joint_point(q)
+    e, zt, xa, ya = p["e"], p["zt"], p["xa"], p["ya"]
+    Ex, Ey = joint_point(q, p)
     ph, de = q[3], q[4]
     return ca.vertcat(
         Ex - e * ca.sin(ph + de) - zt * ca.cos(de) - xa,
@@ -296,9 +338,10 @@ def loop_a_delta(q: ca.SX, t: ca.SX | None = None) -> ca.SX:
     )
 
 
-def loop_a_eps(q: ca.SX, t: ca.SX | None = None) -> ca.SX:
+def loop_a_eps(q: ca.SX, t: ca.SX | None = None, p: Mapping[str, float] = PARAMETERS) -> ca.SX:
     """Rows g5, g6: ``E = A + (zf cos(Ω+ε) + u sin ε, zf sin(Ω+ε) − u cos ε)``."""
-    Ex, Ey = joint_point(q)
+    zf, u, xa, ya = p["zf"], p["u"], p["xa"], p["ya"]
+    Ex, Ey = joint_point(q, p)
     om, ep = q[5], q[6]
     return ca.vertcat(
         Ex - zf * ca.cos(om + ep) - u * ca.sin(ep) - xa,
@@ -306,7 +349,52 @@ def loop_a_eps(q: ca.SX, t: ca.SX | None = None) -> ca.SX:
     )
 
 
-def build(t_end: float = REFERENCE_T) -> Scene:
+@dataclass(frozen=True)
+class Reference:
+    """The mechanism's state at one instant, in a scene's units (:func:`reference`).
+
+    Attributes
+    ----------
+    t : float
+        The instant.
+    q, v, a : (7,) arrays
+        The angles (rad, the same in every unit), the angular velocities and the accelerations.
+    lam : (6,) array
+        The multipliers in the test-set sign (forces, N in SI); gausspp's ``u`` is ``−lam``.
+    """
+
+    t: float
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    lam: np.ndarray
+
+
+#: The published states (SI): at t = 0, the published reference at t = 0.03 and the converged values there.
+_STATES = {
+    "initial": (0.0, Q0, V0, ACCELERATION0, LAMBDA0),
+    "published": (REFERENCE_T, REFERENCE_Q, REFERENCE_V, REFERENCE_A, REFERENCE_LAMBDA),
+    "converged": (REFERENCE_T, CONVERGED_Q, CONVERGED_V, CONVERGED_A, CONVERGED_LAMBDA),
+}
+
+
+def reference(scene: Scene | None = None, which: str = "published") -> Reference:
+    """A published state of the mechanism in the units ``scene`` was built in (its ``metre``, ``kilogram`` and
+    ``second``; SI without a scene): ``"initial"`` (t = 0, :data:`ACCELERATION0`, :data:`LAMBDA0`),
+    ``"published"`` (t = 0.03, :data:`REFERENCE_Q` …) or ``"converged"`` (t = 0.03, :data:`CONVERGED_Q` …).
+
+    Times scale as seconds, angles not at all, velocities as 1/s, accelerations as 1/s², multipliers as N.
+    """
+    if which not in _STATES:
+        raise UnknownNameError(f"andrews.reference: which={which!r} is unknown; use one of {list(_STATES)}")
+    params = {} if scene is None else scene.params
+    metre, kilogram, second = (float(params.get(k, 1.0)) for k in ("metre", "kilogram", "second"))
+    t, q, v, a, lam = _STATES[which]
+    newton = _factor((1, 1, -2), metre, kilogram, second)
+    return Reference(t * second, q.copy(), v / second, a / second**2, lam * newton)
+
+
+def build(t_end: float | None = None, metre: float = 1.0, kilogram: float = 1.0, second: float = 1.0) -> Scene:
     """Andrews' squeezing mechanism: 7 bodies, 6 holonomic loop-closure constraints (Hairer–Wanner / Bari test set)
 
     ``q = (β, Θ, γ, Φ, δ, Ω, ε)``, ``M(q) q̈ = f(q, q̇) − Gᵀλ`` with the test set's ``M`` and ``f``,
@@ -316,24 +404,42 @@ def build(t_end: float = REFERENCE_T) -> Scene:
     is the published solution at ``t = 0.03`` (:data:`REFERENCE_Q`, angles good to 1.4e-9) and
     the converged :data:`CONVERGED_Q`; see the module docstring.
 
+    The published data are SI. ``metre``, ``kilogram`` and ``second`` write the same mechanism in other units: every
+    published constant is multiplied by its unit's number (:func:`parameters_in`), and :func:`reference` gives the
+    reference states in those units.
+
     Parameters
     ----------
-    t_end : float
-        Suggested horizon of a simulation; the published reference is at 0.03 s (s). Allowed: > 0.
+    t_end : float or None
+        Suggested horizon of a simulation; None: the published reference's instant, 0.03 s in the scene's units of
+        time (s). Allowed: > 0 or None.
+    metre : float
+        One metre in the scene's unit of length: every published length is multiplied by it (1e3: millimetres)
+        (m). Allowed: > 0.
+    kilogram : float
+        One kilogram in the scene's unit of mass (1e3: grams) (kg). Allowed: > 0.
+    second : float
+        One second in the scene's unit of time (1e3: milliseconds) (s). Allowed: > 0.
     """
+    for key, value in (("metre", metre), ("kilogram", kilogram), ("second", second)):
+        if not (np.isfinite(value) and value > 0):
+            raise InputError(f"andrews: {key} must be a positive number (one {key} in the scene's units), got {value}")
+    t_end = REFERENCE_T * second if t_end is None else t_end
     if not (np.isfinite(t_end) and t_end > 0):
         raise InputError(f"andrews: t_end must be positive, got {t_end}")
+    p = parameters_in(metre, kilogram, second)
+    mom = p["mom"]
     mechanism = MassMatrix(
         n=7,
-        A=mass_matrix,
-        f=force,
-        energy=_energy,
+        A=lambda q, t: mass_matrix(q, t, p),
+        f=lambda q, v, t: force(q, v, t, p),
+        energy=lambda q, v, t: _energy(q, v, t, p),
         nonconservative=lambda q, v, t: ca.vertcat(mom, ca.SX.zeros(6)),
     )
     constraints = [
-        Holonomic(loop_b, name="loop-B"),
-        Holonomic(loop_a_delta, name="loop-A-delta"),
-        Holonomic(loop_a_eps, name="loop-A-eps"),
+        Holonomic(lambda q, t: loop_b(q, t, p), name="loop-B"),
+        Holonomic(lambda q, t: loop_a_delta(q, t, p), name="loop-A-delta"),
+        Holonomic(lambda q, t: loop_a_eps(q, t, p), name="loop-A-eps"),
     ]
     return Scene(
         name="andrews",
@@ -345,5 +451,5 @@ def build(t_end: float = REFERENCE_T) -> Scene:
         t_end=float(t_end),
         exact=None,
         description="Andrews' squeezing mechanism: 7 bodies, 6 holonomic loop closures; published reference at t=0.03",
-        params=dict(t_end=float(t_end)),
+        params=dict(t_end=float(t_end), metre=float(metre), kilogram=float(kilogram), second=float(second)),
     )

@@ -135,7 +135,7 @@ def check_parameters(
         if key not in known:
             raise UnknownNameError(f"scene {scene!r} has no parameter {key!r}; its parameters: {', '.join(known)}")
         checked[key] = _typed(scene, key, value, kinds(known[key]), key in infinite_ok)
-    if "t_end" in checked and not checked["t_end"] > 0:
+    if checked.get("t_end") is not None and not checked["t_end"] > 0:
         raise InputError(f"scene {scene!r}: t_end must be positive, got {params['t_end']!r}")
     return checked
 

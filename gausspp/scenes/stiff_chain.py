@@ -2,8 +2,8 @@
 
 ``n`` masses on a line, ``q`` their displacements. Spring 0 joins mass 0 to a wall, spring ``i``
 (``1 ≤ i < n``) joins masses ``i − 1`` and ``i``; soft springs have stiffness ``k``, the springs
-listed in ``stiff`` have ``stiffness_ratio · k``. The masses grow geometrically from ``1`` to
-``mass_ratio``. A lever ties the last two masses: ``Φ = v[n−1] + v[n−2] = 0``, kept ideally
+listed in ``stiff`` have ``stiffness_ratio · k``. The masses grow geometrically from ``m`` to
+``mass_ratio · m``. A lever ties the last two masses: ``Φ = v[n−1] + v[n−2] = 0``, kept ideally
 (``realization="ideal"``, a lever with a fixed pivot) or by a follower force on the last mass
 (``realization="servo"``, Béghin, ``M = e_{n−1}``).
 
@@ -53,6 +53,7 @@ def build(
     realization: str = "ideal",
     k: float = 1.0,
     amplitude: float = 0.5,
+    m: float = 1.0,
     t_end: float = 10.0,
 ) -> Scene:
     """Chain of masses on soft and stiff springs (stiffness ratio 1e6 by default), lever constraint (ideal or servo).
@@ -64,7 +65,7 @@ def build(
     stiffness_ratio : float
         Stiffness of the stiff springs over ``k`` (-). Allowed: > 0.
     mass_ratio : float
-        Last mass over the first: the masses grow geometrically from 1 kg to ``mass_ratio`` kg (-). Allowed: > 0.
+        Last mass over the first: the masses grow geometrically from ``m`` to ``mass_ratio · m`` (-). Allowed: > 0.
     stiff : sequence of int
         Indices of the stiff springs: spring 0 joins mass 0 to the wall, spring ``i`` masses ``i − 1`` and ``i``
         (-). Allowed: integers from 0 to n − 1 (repeats ignored; empty: no stiff spring).
@@ -75,12 +76,14 @@ def build(
         Stiffness of the soft springs (N/m). Allowed: > 0.
     amplitude : float
         Initial displacements ``∓amplitude`` of the last two masses (m). Allowed: any finite number.
+    m : float
+        Mass of the first body (kg). Allowed: > 0.
     t_end : float
         Suggested horizon of a simulation (s). Allowed: > 0.
     """
-    stiff = _checked(n, stiffness_ratio, mass_ratio, stiff, realization, k)
+    stiff = _checked(n, stiffness_ratio, mass_ratio, stiff, realization, k, m)
     n = int(n)
-    masses = float(mass_ratio) ** (np.arange(n) / (n - 1))
+    masses = float(m) * float(mass_ratio) ** (np.arange(n) / (n - 1))
     springs = np.full(n, float(k))
     springs[stiff] *= stiffness_ratio
     E_all = _extension_rows(n, range(n))
@@ -115,22 +118,24 @@ def build(
             realization=realization,
             k=k,
             amplitude=amplitude,
+            m=m,
             t_end=t_end,
         ),
     )
 
 
 def _checked(
-    n: int, stiffness_ratio: float, mass_ratio: float, stiff: Sequence[int], realization: str, k: float
+    n: int, stiffness_ratio: float, mass_ratio: float, stiff: Sequence[int], realization: str, k: float, m: float
 ) -> list[int]:
     """The parameters checked; the stiff springs' indices sorted, without repeats."""
     if realization not in REALIZATIONS:
         raise UnknownNameError(f"stiff-chain: realization={realization!r} is unknown; use one of {list(REALIZATIONS)}")
     if not isinstance(n, (int, np.integer)) or n < 3:
         raise InputError(f"stiff-chain: need n ≥ 3 masses (a spring to the wall, the lever on the last two), got {n!r}")
-    if not (stiffness_ratio > 0 and mass_ratio > 0 and k > 0):
+    if not (stiffness_ratio > 0 and mass_ratio > 0 and k > 0 and m > 0):
         raise InputError(
-            f"stiff-chain: stiffness_ratio, mass_ratio and k must be positive, got {stiffness_ratio}, {mass_ratio}, {k}"
+            "stiff-chain: stiffness_ratio, mass_ratio, k and m must be positive, "
+            f"got {stiffness_ratio}, {mass_ratio}, {k}, {m}"
         )
     stiff = sorted({int(s) for s in stiff})
     if any(not 0 <= s < n for s in stiff):

@@ -33,6 +33,7 @@ def build(
     realization: str = "ideal",
     v: float = 0.0,
     k: float = 0.0,
+    l: float = 1.0,
     t_end: float = 1.0,
 ) -> Scene:
     """Two masses joined by a rod (ideal) or kept together by a follower force on ``m1`` (servo).
@@ -53,13 +54,15 @@ def build(
     k : float
         Stiffness of the spring from the second mass to the wall, force ``−k x₂`` (N/m). Allowed: ≥ 0 (0: no
         spring).
+    l : float
+        Length of the rod: the initial distance ``x₂ − x₁``, with ``x₁ = 0`` at the start (m). Allowed: > 0.
     t_end : float
         Suggested horizon of a simulation (s). Allowed: > 0.
     """
     if realization not in REALIZATIONS:
         raise UnknownNameError(f"two-masses: realization={realization!r} is unknown; use one of {list(REALIZATIONS)}")
-    if not (m1 > 0 and m2 > 0 and k >= 0):
-        raise InputError(f"two-masses: need m1, m2 > 0 and k ≥ 0, got m1={m1}, m2={m2}, k={k}")
+    if not (m1 > 0 and m2 > 0 and k >= 0 and l > 0):
+        raise InputError(f"two-masses: need m1, m2 > 0, k ≥ 0 and l > 0, got m1={m1}, m2={m2}, k={k}, l={l}")
     body = Lagrangian(
         n=2,
         T=lambda q, v, t: 0.5 * m1 * v[0] ** 2 + 0.5 * m2 * v[1] ** 2,
@@ -69,7 +72,7 @@ def build(
     real = Ideal() if realization == "ideal" else Force(M=lambda q, v, t: [1, 0])
     model = Model(body, [Constraint(lambda q, v, t: v[1] - v[0], name="rod", realization=real)])
     inertia = m1 + m2 if realization == "ideal" else m2  # what F − k x₂ accelerates
-    q0, v0 = np.array([0.0, 1.0]), np.array([v, v])
+    q0, v0 = np.array([0.0, float(l)]), np.array([v, v])
 
     def exact(t: float) -> tuple[np.ndarray, np.ndarray]:
         if k == 0:
@@ -79,7 +82,7 @@ def build(
         rest = F / k  # x₂ about its equilibrium: harmonic with frequency w
         x2 = rest + (q0[1] - rest) * np.cos(w * t) + v / w * np.sin(w * t)
         v2 = -(q0[1] - rest) * w * np.sin(w * t) + v * np.cos(w * t)
-        return np.array([x2 - 1.0, x2]), np.array([v2, v2])
+        return np.array([x2 - l, x2]), np.array([v2, v2])
 
     return Scene(
         name="two-masses",
@@ -91,7 +94,7 @@ def build(
         t_end=t_end,
         exact=exact,
         description="two masses on a line, rod (ideal) or follower force (servo); paper §1",
-        params=dict(m1=m1, m2=m2, F=F, realization=realization, v=v, k=k, t_end=t_end),
+        params=dict(m1=m1, m2=m2, F=F, realization=realization, v=v, k=k, l=l, t_end=t_end),
         drawing=drawing,
     )
 
