@@ -71,3 +71,11 @@ def test_the_friction_lane_refuses_what_it_does_not_take() -> None:
     q0, v0 = machine.initial_state()
     with pytest.raises(gp.InputError, match="method='rk4' is not taken by the friction lane"):
         gp.simulate(machine.model, q0, v0, 0.1, method="rk4")
+
+
+def test_verify_says_it_does_not_check_a_frictional_run() -> None:
+    machine = gp.from_mjcf(str(zoo() / "gymnasium/hopper.xml"))
+    q0, v0 = machine.initial_state()
+    traj = gp.simulate(machine.model, q0, v0, 0.2)
+    with pytest.raises(gp.InputError, match="gp.verify does not check frictional motions"):
+        gp.verify(machine.model, traj)

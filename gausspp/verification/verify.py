@@ -65,12 +65,13 @@ def verify(
     say what was checked; a trajectory of which no piece can be checked raises
     :class:`~gausspp.InputError` with the reasons.
     """
-    if type(trajectory).__name__ == "FrictionRun":  # gausspp.friction's result: no principle (23) for it here
+    frictional = type(trajectory).__name__ == "FrictionRun" or getattr(trajectory, "lane", "") == "friction"
+    if frictional or getattr(model, "friction", ()):  # Coulomb friction: no principle (23) for it here
         raise InputError(
             "gp.verify does not check frictional motions: (23) compares a path with the motions of ideal or "
             "prescribed realizations, and Coulomb friction is a reaction whose direction depends on the motion "
             "itself (docs/friction.md); check a frictional run by its closed forms and its energy, which friction "
-            "never raises (FrictionRun.energy)"
+            "never raises (its energy), and the gaps and slips the run records (Trajectory.gap, .slip, .modes)"
         )
     check_model(model)
     if method not in ("qp", "closed-form"):
