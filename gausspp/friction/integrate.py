@@ -31,7 +31,7 @@ from ..validation import array, flag, positive, record_times
 from ..workspace import workspace
 from .fixed_step import Phases, run_phase
 from .kinematics import ContactKinematics, ContactState
-from .modes import OPEN, SLIDE, STICK, Modes, Solution, check_painleve, choose, solve
+from .modes import HELD, OPEN, SLIDE, STICK, Modes, Solution, check_painleve, choose, solve
 from .phase_graph import SLIP_FLOOR, TURN
 from .run import FrictionRun, Record
 
@@ -116,12 +116,12 @@ class _Runner:
             for i, kind in enumerate(modes.kinds):
                 if kind == OPEN and abs(st.g[i]) <= TIE * size[i]:
                     gap_band[i] = TIE * size[i]
-                elif kind != OPEN and abs(sol.N[i]) <= TIE * force:
+                elif kind not in (OPEN, HELD) and abs(sol.N[i]) <= TIE * force:
                     force_band[i] = TIE * force
         opened = [i for i, kind in enumerate(modes.kinds) if kind == OPEN]
         out = [self._gap_event(opened, gap_band[opened])] if opened else []
         for i, kind in enumerate(modes.kinds):
-            if kind == OPEN:
+            if kind in (OPEN, HELD):  # a bilateral row neither lifts off nor slips
                 continue
             else:
                 out.append(self._event(modes, lambda st, sol, i=i, b=force_band[i]: sol.N[i] + b, ("lifts off", i)))

@@ -29,9 +29,15 @@ import numpy as np
 
 from ..errors import IntegrationError, PainleveError
 from ..model.friction_contact import FrictionContact
+from .kinds import HELD, OPEN, SLIDE, STICK
 from .kinematics import ContactState
 
-OPEN, STICK, SLIDE = "open", "stick", "slide"
+__all__ = ["HELD", "OPEN", "SLIDE", "STICK", "Modes", "Solution", "choose", "solve", "check_painleve"]
+
+
+def held(contact: FrictionContact) -> bool:
+    """Whether ``contact`` is a bilateral row (a holonomic constraint of the model), not a contact."""
+    return bool(getattr(contact, "held", False))
 
 
 @dataclass(frozen=True)
@@ -60,6 +66,10 @@ class Solution:
     x: np.ndarray
     N: np.ndarray
     F: list[np.ndarray]
+    #: the reaction's columns and which force each carries (``(contact, -1)`` its ``N``, ``(contact, j)`` its
+    #: ``F[j]``): for moving the forces of redundant contacts within their cones (:mod:`.redistribute`)
+    C: np.ndarray | None = None
+    where: tuple[tuple[int, int], ...] = ()
 
 
 def solve(
@@ -83,6 +93,9 @@ def solve(
             rows += list(state.Jt[i])
             rhs += list(target_t[i])
             where += [(i, -1)] + [(i, j) for j in range(state.Jt[i].shape[0])]
+        elif kind == HELD or contacts[i].mu == 0.0:  # no force along the slip: the normal column alone
+            cols.append(state.Jn[i])
+            where.append((i, -1))
         else:
             cols.append(state.Jn[i] - contacts[i].mu * modes.dirs[i] @ state.Jt[i])
             where.append((i, -1))
@@ -107,7 +120,7 @@ def solve(
     for i, kind in enumerate(modes.kinds):
         if kind == SLIDE:
             F[i] = -contacts[i].mu * N[i] * modes.dirs[i]
-    return Solution(x0 + AinvC @ u, N, F)
+    return Solution(x0 + AinvC @ u, N, F, C, tuple(where))
 
 
 def compliance(state: ContactState, contact: FrictionContact, i: int, direction: np.ndarray) -> tuple[float, float]:
@@ -153,7 +166,7 @@ def consistent(
     for i, kind in enumerate(modes.kinds):
         if kind == OPEN and residual_n[i] < -tol:
             return False
-        if kind != OPEN and sol.N[i] < -tol:
+        if kind not in (OPEN, HELD) and sol.N[i] < -tol:
             return False
         if kind == STICK and np.linalg.norm(sol.F[i]) > contacts[i].mu_static * sol.N[i] + tol:
             return False
@@ -181,7 +194,9 @@ def choose(
     options = []
     forced = forced or {}
     for i in range(len(contacts)):
-        if i not in candidates:
+        if held(contacts[i]):
+            options.append((HELD,))
+        elif i not in candidates:
             options.append((OPEN,))
         elif contacts[i].mu_static == 0.0:  # frictionless: pushes along its normal (sliding) or lets go
             options.append((OPEN,) if forced.get(i) == (OPEN,) else (SLIDE, OPEN))
@@ -207,6 +222,14 @@ def choose(
         ]
         if consistent(contacts, modes, sol, res_n, res_t, tol):
             return modes, sol
+        if sol.C is not None and any(k in (STICK, SLIDE) for k in kinds):  # redundant contacts: other forces?
+            from .redistribute import within_cones
+
+            forces = within_cones(contacts, modes.kinds, modes.dirs, sol.N, sol.F, sol.C, list(sol.where), tol)
+            if forces is not None:
+                moved = Solution(sol.x, forces[0], forces[1], sol.C, sol.where)
+                if consistent(contacts, modes, moved, res_n, res_t, tol):
+                    return modes, moved
     raise IntegrationError(
         f"no consistent contact modes at t={t:.6g} for contacts {[contacts[i].name for i in candidates]}: the "
         "frictional contact problem has no solution here (a wedged configuration); check the contacts' geometry"

@@ -27,7 +27,7 @@ from scipy.linalg import qr
 from ..c_code import c_function
 from ..model.friction_contact import FrictionContact
 from .kinematics import ContactKinematics
-from .modes import OPEN, SLIDE, STICK
+from .modes import HELD, OPEN, SLIDE, STICK
 
 #: Steps taken in one call of a phase's ``chunk``.
 CHUNK = 256
@@ -170,10 +170,14 @@ class PhaseGraph:
         for i, kind in enumerate(kinds):
             if kind == SLIDE:
                 F[i] = -contacts[i].mu * N[i] * P["dirs"][i]
+            if kind == HELD:  # a bilateral row neither lifts off nor slips
+                continue
             if kind == OPEN:
                 events.append(S["g"][i]), self.events.append(("closes", i))
             else:
                 events.append(N[i]), self.events.append(("lifts off", i))
+            if contacts[i].mu_static == 0.0:  # frictionless: its slip changes nothing
+                continue
             if kind == SLIDE:
                 part = slice(int(o[i]), int(o[i + 1]))
                 events.append(ca.dot(d[part], S["s"][part])), self.events.append(("stops slipping", i))
