@@ -124,7 +124,7 @@ def simulate(
     -------
     Trajectory
     """
-    if model.friction:  # frictional contacts: the friction lane (simulate_friction), its run as a Trajectory
+    if getattr(model, "friction", ()):  # frictional contacts: the friction lane (simulate_friction), a Trajectory
         from . import friction_lane
 
         friction_lane.check_friction_options(
