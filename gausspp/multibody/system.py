@@ -59,6 +59,7 @@ class Multibody:
         self._rows: list[tuple[str, J.Row, Realization | str | None]] = []
         self._extra: list[Constraint] = []
         self._ground_points: list[np.ndarray] = []
+        self._friction: list[Any] = []
         self._mechanism: Bodies | None = None
         self._assembly: tuple[ca.Function, ...] | None = None  # built on first assemble, dropped on any change
 
@@ -332,8 +333,38 @@ class Multibody:
         """One :class:`gausspp.Holonomic` per joint row, then the motors and spins."""
         return [Holonomic(fn, name=name, realization=real) for name, fn, real in self._rows] + list(self._extra)
 
+    def ground_contact(
+        self, name: str, body: str, point: Any = None, *, mu: float, mu_static: float | None = None,
+        radius: float = 0.0, normal: Any = None, height: float = 0.0, restitution: float = 0.0,
+    ) -> None:  # fmt: skip
+        """A point of ``body`` (``point`` from its centre of mass, body axes; default the centre) — with a sphere of
+        ``radius`` around it — on the ground plane ``normal·x = height`` (``normal`` default: against gravity), a
+        hard contact with Coulomb friction ``mu`` (:mod:`gausspp.multibody.ground`); :meth:`model` takes it."""
+        from .ground import ground_contact
+
+        if name in {c.name for c in self._friction}:
+            raise InputError(f"Multibody.ground_contact: a contact {name!r} exists already")
+        b = self._moving("ground_contact", name, body, "name a body added with Multibody.body")
+        up = -self.gravity / np.linalg.norm(self.gravity) if np.any(self.gravity) else np.eye(self.dim)[-1]
+        self._friction.append(
+            ground_contact(
+                b,
+                name,
+                np.zeros(self.dim) if point is None else point,
+                up if normal is None else normal,
+                height,
+                radius,
+                mu,
+                mu_static,
+                restitution,
+            )  # fmt: skip
+        )
+
     def model(self, **options: Any) -> Model:
-        """The :class:`gausspp.Model` of the bodies and joints (``options`` as for ``gp.Model``)."""
+        """The :class:`gausspp.Model` of the bodies and joints (``options`` as for ``gp.Model``), with the ground
+        contacts (:meth:`ground_contact`) as its frictional contacts."""
+        if self._friction:
+            options["friction"] = [*self._friction, *options.get("friction", ())]
         return Model(self.mechanism, self.constraints, **options)
 
     @property
