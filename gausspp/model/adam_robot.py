@@ -30,6 +30,9 @@ from adam.model import Model
 from adam.model.std_factories.std_joint import StdJoint
 from adam.model.std_factories.std_model import URDFModelFactory
 
+from .mechanism import quaternion_to_matrix
+from .urdf_clean import quiet
+
 #: The adam-robotics version the workarounds are written for (``gausspp[robots]`` pins it).
 ADAM_VERSION = "0.5.0"
 
@@ -75,48 +78,74 @@ class FixedFactory(URDFModelFactory):
         return FixedJoint(joint, self.math)
 
 
-def movable_joints(path: str) -> list[tuple[str, str]]:
-    """``(name, type)`` of the URDF's non-fixed joints, in the file's order."""
-    factory = URDFModelFactory(path=path, math=FixedMath())
+def movable_joints(xml: str) -> list[tuple[str, str]]:
+    """``(name, type)`` of the URDF's non-fixed joints, in the file's order (``xml``: the cleaned text,
+    :func:`gausspp.model.urdf_clean.clean_urdf`)."""
+    with quiet():
+        factory = URDFModelFactory(path=xml, math=FixedMath())
     return [(j.name, j.joint_type) for j in factory.urdf_desc.joints if j.joint_type != "fixed"]
 
 
 class AdamRobot:
-    """A fixed-base robot's dynamics and kinematics as casadi expressions (adam's algorithms, bugs fixed).
+    """A robot's dynamics and kinematics as casadi expressions (adam's algorithms, bugs fixed).
 
     Parameters
     ----------
-    path : str
-        URDF file (or string).
+    xml : str
+        The URDF's cleaned text (:func:`gausspp.model.urdf_clean.clean_urdf`).
     joints : list of str
         The joints that move, in the order of ``q``.
     g : float
-        Gravity along ``−z`` of the base frame.
+        Gravity along ``−z`` of the world frame.
+    floating : bool
+        A floating base: ``q = (p, ρ, s)`` — the base frame's origin ``p`` in the world, its unit quaternion ``ρ``
+        ``(w, x, y, z)`` (base → world) and the joints ``s`` — and ``v = (u, ω, ṡ)`` with the base's velocity
+        ``u`` and angular velocity ``ω`` both in **base axes** (adam's body-fixed representation, Pinocchio's
+        free-flyer's). Otherwise the base is the world frame and ``q = s``.
     """
 
-    def __init__(self, path: str, joints: list[str], g: float) -> None:
+    def __init__(self, xml: str, joints: list[str], g: float, floating: bool = False) -> None:
+        from adam.core.constants import Representations
+
         math = FixedMath()
-        model = Model.build(factory=FixedFactory(path=path, math=math), joints_name_list=joints)
+        with quiet():
+            model = Model.build(factory=FixedFactory(path=xml, math=math), joints_name_list=joints)
         self.algorithms = RBDAlgorithms(model=model, math=math)
+        self.algorithms.set_frame_velocity_representation(Representations.BODY_FIXED_REPRESENTATION)
         self.gravity = np.array([0.0, 0.0, -g, 0.0, 0.0, 0.0])
         self.frames = set(model.links) | set(model.frames)
         self.n = len(joints)
+        self.floating = bool(floating)
         self.mass = float(self.algorithms.get_total_mass())
 
+    def base(self, q: ca.SX) -> tuple[ca.SX, ca.SX]:
+        """The base's homogeneous transform (base → world) and the joint coordinates, from ``q``."""
+        if not self.floating:
+            return ca.SX.eye(4), q
+        p, rho = q[0:3], q[3:7]
+        R = quaternion_to_matrix(rho / ca.norm_2(rho))
+        H = ca.vertcat(ca.horzcat(R, p), ca.horzcat(ca.SX.zeros(1, 3), ca.SX(1)))
+        return H, q[7:]
+
     def mass_matrix(self, q: ca.SX) -> ca.SX:
-        """The joint block of the CRBA mass matrix (the base held fixed at the world frame)."""
-        M, _ = self.algorithms.crba(ca.SX.eye(4), q)
-        return M.array[6:, 6:]
+        """The CRBA mass matrix: the joints' block for a fixed base, the whole ``(6 + n)²`` for a floating one."""
+        H, s = self.base(q)
+        M, _ = self.algorithms.crba(H, s)
+        return M.array if self.floating else M.array[6:, 6:]
 
     def bias(self, q: ca.SX, v: ca.SX) -> ca.SX:
-        """``h(q, v) = C(q, v) v + g(q)``: the joint torques of zero acceleration (RNEA, base fixed)."""
-        h = self.algorithms.rnea(ca.SX.eye(4), q, ca.SX.zeros(6), v, self.gravity)
-        return h.array[6:]
+        """``h(q, v) = C(q, v) v + g(q)``: the generalized forces of zero acceleration (RNEA)."""
+        H, s = self.base(q)
+        base_velocity, sdot = (v[0:6], v[6:]) if self.floating else (ca.SX.zeros(6), v)
+        h = self.algorithms.rnea(H, s, base_velocity, sdot, self.gravity)
+        return h.array if self.floating else h.array[6:]
 
     def pose(self, frame: str, q: ca.SX) -> ca.SX:
-        """The ``4 × 4`` homogeneous transform of ``frame`` in the base (world) frame."""
-        return self.algorithms.forward_kinematics(frame, ca.SX.eye(4), q).array
+        """The ``4 × 4`` homogeneous transform of ``frame`` in the world frame."""
+        H, s = self.base(q)
+        return self.algorithms.forward_kinematics(frame, H, s).array
 
     def com(self, q: ca.SX) -> ca.SX:
-        """The centre of mass in the base frame."""
-        return self.algorithms.CoM_position(ca.SX.eye(4), q).array
+        """The centre of mass in the world frame."""
+        H, s = self.base(q)
+        return self.algorithms.CoM_position(H, s).array

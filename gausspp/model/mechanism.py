@@ -243,6 +243,17 @@ def quaternion_to_matrix(p: ca.SX) -> ca.SX:
     )
 
 
+def quaternion_rate(p: Any, w: Any) -> Any:
+    """``ṗ = ½ p ⊗ (0, ω)``: a unit quaternion's rate for the angular velocity ``ω`` in the frame ``p`` carries."""
+    pw, px, py, pz = p[0], p[1], p[2], p[3]
+    return 0.5 * ca.vertcat(
+        -px * w[0] - py * w[1] - pz * w[2],
+        pw * w[0] + py * w[2] - pz * w[1],
+        pw * w[1] + pz * w[0] - px * w[2],
+        pw * w[2] + px * w[1] - py * w[0],
+    )
+
+
 class RigidBody(Mechanism):
     """A rigid body about a fixed point (or its centre of mass), in body angular velocity ``ω``.
 
@@ -286,13 +297,7 @@ class RigidBody(Mechanism):
         Iw = ca.SX(ca.DM(I)) @ w
         self.A = ca.SX(ca.DM(I))
         self.f = moment - ca.cross(w, Iw)
-        pw, px, py, pz = q[0], q[1], q[2], q[3]
-        self.qdot = 0.5 * ca.vertcat(
-            -px * w[0] - py * w[1] - pz * w[2],
-            pw * w[0] + py * w[2] - pz * w[1],
-            pw * w[1] + pz * w[0] - px * w[2],
-            pw * w[2] + px * w[1] - py * w[0],
-        )
+        self.qdot = quaternion_rate(q, w)
         self.energy = 0.5 * ca.dot(w, Iw)
         self.F_nc = moment
 

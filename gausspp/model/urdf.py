@@ -24,10 +24,11 @@ from importlib import metadata
 from typing import Any
 
 import casadi as ca
+import numpy as np
 
 from ..errors import GaussppError, InputError, UnknownNameError
 from ..validation import number
-from .mechanism import MassMatrix
+from .mechanism import MassMatrix, quaternion_rate, quaternion_to_matrix
 from .symbolic import evaluate
 
 #: What to install for :func:`from_urdf`.
@@ -41,38 +42,86 @@ UNREAD = ("planar", "floating")
 
 
 class URDFMechanism(MassMatrix):
-    """A fixed-base URDF robot, ``A(q) q̈ = τ − h(q, v)`` (built by :func:`from_urdf`).
+    """A URDF robot, ``A(q) v̇ = τ − h(q, v)`` (built by :func:`from_urdf`).
 
     Attributes
     ----------
     joint_names : tuple of str
-        The joints, in the order of ``q`` and ``v``.
+        The joints, in the order of their coordinates (after the base's seven for a floating base).
+    floating : bool
+        Whether the base floats (``q = (p, ρ, s)``, ``v = (u, ω, ṡ)``: :func:`from_urdf`).
     robot : AdamRobot
         The kinematics and dynamics as casadi expressions (:mod:`gausspp.model.adam_robot`).
     """
 
-    def __init__(self, robot: Any, joint_names: Sequence[str], g: float, torque: Callable[..., Any] | None) -> None:
-        n = len(joint_names)
+    def __init__(
+        self,
+        robot: Any,
+        joint_names: Sequence[str],
+        g: float,
+        torque: Callable[..., Any] | None,
+        floating: bool = False,
+    ) -> None:
+        joints = len(joint_names)
+        n = joints + (6 if floating else 0)
         self.robot = robot
         self.joint_names = tuple(joint_names)
-        self.coordinate_names = self.velocity_names = self.joint_names  # names in results and plots
+        self.floating = bool(floating)
+        base_q = ("base.x", "base.y", "base.z", "base.qw", "base.qx", "base.qy", "base.qz") if floating else ()
+        base_v = ("base.u", "base.v", "base.w", "base.ωx", "base.ωy", "base.ωz") if floating else ()
+        self.coordinate_names = (*base_q, *self.joint_names)  # names in results and plots
+        self.velocity_names = (*base_v, *self.joint_names)
         self.g = float(g)
 
         def applied(q: Any, v: Any, t: Any) -> Any:
             if torque is None:
                 return ca.SX.zeros(n)
-            return evaluate(torque, (q, v, t), (n, 1), "torque(q, v, t)")
+            tau = evaluate(torque, (q, v, t), (joints, 1), "torque(q, v, t)")
+            return ca.vertcat(ca.SX.zeros(n - joints), tau)
 
         def energy(q: Any, v: Any, t: Any) -> Any:
             return 0.5 * ca.dot(v, robot.mass_matrix(q) @ v) + robot.mass * self.g * robot.com(q)[2]
+
+        def kinematics(q: Any, v: Any, t: Any) -> Any:  # ṗ = R u, ρ̇ = ½ ρ ⊗ (0, ω), ṡ = ṡ
+            rho = q[3:7]
+            R = quaternion_to_matrix(rho / ca.norm_2(rho))
+            return ca.vertcat(R @ v[0:3], quaternion_rate(rho, v[3:6]), v[6:])
 
         super().__init__(
             n,
             A=lambda q, t: robot.mass_matrix(q),
             f=lambda q, v, t: applied(q, v, t) - robot.bias(q, v),
             energy=energy,
+            kinematics=kinematics if floating else None,
+            nq=n + 1 if floating else None,
             nonconservative=applied,
         )
+
+    def normalize(self, q: ca.SX) -> ca.SX:
+        """The floating base's quaternion of unit length (a fixed base: ``q`` itself)."""
+        if not self.floating:
+            return q
+        rho = q[3:7] / ca.norm_2(q[3:7])
+        return ca.vertcat(q[0:3], rho, q[7:])
+
+    def normalize_array(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`normalize` on numbers (one configuration, or one per row)."""
+        if not self.floating:
+            return q
+        out = np.array(q, float, copy=True)
+        out[..., 3:7] /= np.linalg.norm(out[..., 3:7], axis=-1, keepdims=True)
+        return out
+
+    def variation_matrix(self) -> ca.SX:
+        """The floating base's body velocity ``(u, ω)`` is a quasi-velocity: ``δ(u, ω) = η̇ + ad₍ᵤ,ω₎ η`` with
+        ``ad = [[ω×, u×], [0, ω×]]`` (zero for a fixed base)."""
+        C = ca.SX.zeros(self.nv, self.nv)
+        if self.floating:
+            w, u = self.v[3:6], self.v[0:3]
+            C[0:3, 0:3] = ca.skew(w)
+            C[0:3, 3:6] = ca.skew(u)
+            C[3:6, 3:6] = ca.skew(w)
+        return C
 
 
 def _robot_class() -> Any:
@@ -96,21 +145,31 @@ def from_urdf(
     joints: Sequence[str] | None = None,
     g: float = 9.81,
     torque: Callable[..., Any] | None = None,
+    floating: bool = False,
 ) -> URDFMechanism:
-    """A fixed-base robot from a URDF file: ``A(q)``, bias forces, gravity, joint names.
+    """A robot from a URDF file: ``A(q)``, bias forces, gravity, joint names.
 
     Parameters
     ----------
     path : str
-        The URDF file (``package://`` mesh addresses do not matter: only the inertias and joints are read).
+        The URDF file (``package://`` mesh addresses do not matter: only the inertias and joints are read). What
+        URDF allows and adam-robotics trips on is written out first (:mod:`gausspp.model.urdf_clean`: a joint or an
+        inertial without ``<origin>``, materials with textures, transmissions), and the parser's warnings about
+        tags the dynamics do not read are kept quiet.
     joints : sequence of str, optional
         The joints that move, in the order of ``q``; default every revolute, continuous and prismatic
         joint in the file's order. Other joints are held at zero. A ``planar`` or ``floating`` joint (or a
         type URDF does not have) is refused, naming the joint.
     g : float
-        Gravity's magnitude along ``−z`` of the base frame (gausspp's convention, 9.81).
+        Gravity's magnitude along ``−z`` of the world frame (gausspp's convention, 9.81).
     torque : callable ``(q, v, t) -> (n,)``, optional
-        Applied joint torques (friction, springs, a known actuation); none by default.
+        Applied joint torques (friction, springs, a known actuation), one per joint; none by default.
+    floating : bool
+        A floating base (a legged robot, a humanoid): the root link moves freely, ``q = (p, ρ, s)`` — the root
+        frame's origin ``p`` in the world, its unit quaternion ``ρ = (w, x, y, z)`` (root → world), the joints ``s``
+        — and ``v = (u, ω, ṡ)`` with the root's velocity ``u`` and angular velocity ``ω`` in the **root's axes**
+        (Pinocchio's free-flyer's convention), so ``ṗ = R(ρ) u`` and ``ρ̇ = ½ ρ ⊗ (0, ω)``: ``nq = 7 + n``,
+        ``nv = 6 + n``. Default: the root is bolted to the world.
 
     Returns
     -------
@@ -120,9 +179,14 @@ def from_urdf(
     path = _checked_file(path)
     adam_robot = _robot_class()
     g = number(f"from_urdf: g must be a finite number (gravity's magnitude, m/s²), got {g!r}", g)
+    if not isinstance(floating, bool):
+        raise InputError(f"from_urdf: floating must be True or False, got {floating!r}")
     if joints is not None and (isinstance(joints, str) or not all(isinstance(j, str) for j in joints)):
         raise InputError(f"from_urdf: joints must be a list of joint names, got {joints!r}")
-    movable = [name for name, _ in adam_robot.movable_joints(str(path))]  # one coordinate each (_checked_file)
+    from .urdf_clean import clean_urdf
+
+    xml = clean_urdf(path)
+    movable = [name for name, _ in adam_robot.movable_joints(xml)]  # one coordinate each (_checked_file)
     names = movable if joints is None else list(joints)
     for name in names:
         if name not in movable:
@@ -130,9 +194,14 @@ def from_urdf(
                 f"from_urdf: joint {name!r} is not a movable joint of {path}; known: {sorted(movable)}"
             )
     if not names:
-        raise InputError(f"from_urdf: {path} has no revolute, continuous or prismatic joint")
-    robot = adam_robot.AdamRobot(str(path), names, float(g))
-    return URDFMechanism(robot, names, g, torque)
+        raise InputError(
+            f"from_urdf: {path} has no revolute, continuous or prismatic joint: one rigid body, nothing moves with a "
+            "fixed base; write a floating one as a gp.Multibody body (its mass and inertia from the file's link)"
+            if floating
+            else f"from_urdf: {path} has no revolute, continuous or prismatic joint: nothing moves with a fixed base"
+        )
+    robot = adam_robot.AdamRobot(xml, names, float(g), floating)
+    return URDFMechanism(robot, names, g, torque, floating)
 
 
 def _checked_file(path: Any) -> str:

@@ -16,7 +16,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ShapeError
-from ..model.mechanism import Mechanism
+from ..model.mechanism import Mechanism, quaternion_rate
 from ..model.symbolic import evaluate
 from .bodies import Body
 
@@ -48,7 +48,7 @@ class Bodies(Mechanism):
                 omega = w[3:6]
                 forces.append(ca.vertcat(m * g, -ca.cross(omega, J @ omega)) + applied)
                 p = c[3:7]
-                qdots.append(ca.vertcat(w[:3], _quaternion_rate(p, omega)))
+                qdots.append(ca.vertcat(w[:3], quaternion_rate(p, omega)))
                 kinetic += 0.5 * (m * ca.dot(w[:3], w[:3]) + ca.dot(omega, J @ omega))
                 potential -= m * ca.dot(g, c[:3])
             loads.append(applied)
@@ -124,14 +124,3 @@ class Bodies(Mechanism):
                     row[j : j + 3] += ca.cross(v[j : j + 3], p[j : j + 3])
             rows.append(row.T)
         return ca.vertcat(*rows) if rows else ca.SX(0, self.nv)
-
-
-def _quaternion_rate(p: ca.SX, w: ca.SX) -> ca.SX:
-    """``ṗ = ½ p ⊗ (0, ω)`` for ``ω`` in body axes."""
-    pw, px, py, pz = p[0], p[1], p[2], p[3]
-    return 0.5 * ca.vertcat(
-        -px * w[0] - py * w[1] - pz * w[2],
-        pw * w[0] + py * w[2] - pz * w[1],
-        pw * w[1] + pz * w[0] - px * w[2],
-        pw * w[2] + px * w[1] - py * w[0],
-    )

@@ -38,7 +38,7 @@ import casadi as ca
 import numpy as np
 
 from ...errors import ShapeError
-from ...model.mechanism import Mechanism, quaternion_to_matrix
+from ...model.mechanism import Mechanism, quaternion_rate, quaternion_to_matrix
 
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3  # mjtJoint
 
@@ -93,17 +93,6 @@ def constant_rotation(quat: np.ndarray) -> ca.DM:
     """The rotation matrix of a constant quaternion ``(w, x, y, z)`` (normalized first, as MuJoCo does)."""
     p = np.asarray(quat, float)
     return ca.DM(ca.evalf(quaternion_to_matrix(ca.SX(ca.DM(p / np.linalg.norm(p))))))
-
-
-def quaternion_rate(p: Any, w: Any) -> Any:
-    """``ṗ = ½ p ⊗ (0, ω)``, ``ω`` in the frame ``p`` carries."""
-    pw, px, py, pz = p[0], p[1], p[2], p[3]
-    return 0.5 * ca.vertcat(
-        -px * w[0] - py * w[1] - pz * w[2],
-        pw * w[0] + py * w[2] - pz * w[1],
-        pw * w[1] + pz * w[0] - px * w[2],
-        pw * w[2] + px * w[1] - py * w[0],
-    )
 
 
 def frames(bodies: list[TreeBody], q: Any, v: Any) -> Frames:
