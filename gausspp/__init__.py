@@ -53,6 +53,7 @@ if TYPE_CHECKING:  # what the names below are, for type checkers and editors
     from .model.realizations import Force, Ideal, Inertial, Mixed, Realization, Vakonomic
     from .model.scales import Scales
     from .model.urdf import frame_acceleration_bias, frame_jacobian, frame_position, frame_rotation, from_urdf
+    from .model.urdf_contact import frame_contact
     from .multibody import Multibody
     from .multibody.mjcf import MJCFMachine, from_mjcf
     from .servo import ServoDiagnosis, ServoTrajectory, replay, servo_diagnosis, simulate_servo
@@ -108,6 +109,7 @@ _NAMES = {
     "Realization": "gausspp.model.realizations",
     "Vakonomic": "gausspp.model.realizations",
     "frame_acceleration_bias": "gausspp.model.urdf",
+    "frame_contact": "gausspp.model.urdf_contact",
     "frame_jacobian": "gausspp.model.urdf",
     "frame_position": "gausspp.model.urdf",
     "frame_rotation": "gausspp.model.urdf",
@@ -203,6 +205,7 @@ __all__ = [
     "qp",
     "crosscheck",
     "frame_acceleration_bias",
+    "frame_contact",
     "frame_jacobian",
     "frame_position",
     "frame_rotation",

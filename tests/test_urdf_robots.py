@@ -268,3 +268,46 @@ def test_adam_reads_a_joint_axis_as_written() -> None:
         assert float(ca.evalf(ca.substitute(mech.A, mech.q, ca.DM([0.0])))) == pytest.approx(
             adam_inertia("1"), rel=1e-14
         )
+
+
+def standing_solo12(mu: float = 0.8) -> tuple[gp.Model, np.ndarray]:
+    """solo12 with a floating base on its four feet (``gp.frame_contact`` at ``FL_FOOT`` …, friction ``mu``), knees
+    bent, each of its twelve joints held at its angle by a servo-constraint realized by that joint's torque."""
+    mech = gp.from_urdf(str(ROOT / "solo_description/robots/solo12.urdf"), floating=True)
+    feet = [gp.frame_contact(mech, f, mu=mu) for f in ("FL_FOOT", "FR_FOOT", "HL_FOOT", "HR_FOOT")]
+    s = np.zeros(len(mech.joint_names))
+    for k, n in enumerate(mech.joint_names):
+        front = 1.0 if n.startswith("F") else -1.0
+        s[k] = 0.8 * front if "HFE" in n else (-1.6 * front if "KFE" in n else 0.0)
+    q0 = np.r_[0.0, 0.0, 0.5, 1.0, 0.0, 0.0, 0.0, s]
+    gaps = ca.Function("g", [mech.q], [ca.vertcat(*[c.gap(mech.q) for c in feet])])
+    q0[2] -= float(np.min(np.array(gaps(q0))))  # on its feet
+    held = [
+        gp.Holonomic(
+            lambda q, t, a=7 + k, c=float(q0[7 + k]): q[a] - c,
+            name=f"hold {n}",
+            realization=gp.Force(lambda q, v, t, d=6 + k: ca.DM(np.eye(mech.nv)[d][None, :])),
+        )
+        for k, n in enumerate(mech.joint_names)
+    ]
+    return gp.Model(mech, held, friction=feet), q0
+
+
+@pytest.mark.skipif(ROOT is None, reason="example-robot-data is not installed")
+def test_solo12_stands_still_on_its_four_feet_and_slides_to_rest_as_coulomb_says() -> None:
+    """solo12 standing on its feet with its joints held by their torques: 1 s without moving (|v| ≤ 1e-9), its feet
+    sticking. Pushed to 0.2 m/s along x, it slides on its four feet and stops after ``v₀/(μg)`` at ``v₀²/(2μg)`` —
+    Coulomb's law for its centre, whatever the feet's share of the weight — to 1e-8."""
+    model, q0 = standing_solo12(mu=0.8)
+    still = gp.simulate(model, q0, np.zeros(model.nv), 1.0, record=np.linspace(0.0, 1.0, 101))
+    print(f"\nsolo12 standing: |v| ≤ {np.abs(still.v).max():.1e}, feet {still.modes[-1][:4]}")
+    assert still.success and np.abs(still.v).max() <= 1e-9 and still.modes[-1][:4] == ("stick",) * 4
+    v0 = np.zeros(model.nv)
+    v0[0] = 0.2
+    slid = gp.simulate(model, q0, v0, 0.05)
+    stop = next(e for e in slid.events if e["kind"] == "stops slipping")
+    t_stop, x_stop = 0.2 / (0.8 * 9.81), 0.2**2 / (2 * 0.8 * 9.81)
+    print(
+        f"solo12 pushed: stops at {stop['t']:.10f} s (Coulomb {t_stop:.10f}), at {slid.q[-1, 0]:.10f} m ({x_stop:.10f})"
+    )
+    assert slid.success and abs(stop["t"] - t_stop) <= 1e-8 * t_stop and abs(slid.q[-1, 0] - x_stop) <= 1e-8 * x_stop

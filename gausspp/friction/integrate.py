@@ -53,6 +53,7 @@ class _Runner:
         self.names = [c.name for c in contacts]
         self.phases = Phases(self)
         self._last: tuple[Modes, bytes, ContactState, Solution] | None = None
+        self.jac_sparsity = _state_dependence(self.kin, mechanism)
         self._gaps: tuple[bytes, np.ndarray] | None = None
 
     # -- one state --------------------------------------------------------------------------------------------
@@ -90,6 +91,30 @@ class _Runner:
             return np.concatenate([np.array(self.qdot(q, v)).ravel(), self.accel(st, modes, v).x])
 
         return f
+
+    def jacobian(self, modes: Modes) -> Any:
+        """The right-hand side's Jacobian for Radau by forward differences of bounded step: ``h_k = √ε·max(|y_k|,
+        10⁻³ ‖y‖_block)`` on each component the state's functions depend on (:func:`_state_dependence`), zero
+        columns elsewhere. scipy's own differences grow the step of a column that is zero at the state (a
+        quaternion's radial direction, a position along the ground) tenfold per call, without bound, until it
+        overflows."""
+        f = self.rhs(modes)
+        used = np.flatnonzero(self.jac_sparsity[0])
+        root = np.sqrt(np.finfo(float).eps)
+
+        def jac(t: float, y: np.ndarray) -> np.ndarray:
+            f0 = f(t, y)
+            J = np.zeros((y.size, y.size))
+            q_size, v_size = np.abs(y[: self.nq]).max(initial=0.0), np.abs(y[self.nq :]).max(initial=0.0)
+            for k in used:
+                block = q_size if k < self.nq else v_size
+                h = root * max(abs(y[k]), 1e-3 * block, np.finfo(float).tiny ** 0.5)
+                shifted = y.copy()
+                shifted[k] += h
+                J[:, k] = (f(t, shifted) - f0) / (shifted[k] - y[k])
+            return J
+
+        return jac
 
     def method(self, modes: Modes) -> str:
         """DOP853, or Radau where a two-component slip slides: its direction follows the slip with a rate
@@ -237,6 +262,19 @@ class _Runner:
             st, self.contacts, touching, {}, x0=v, target_n=target_n, target_t=target_t, t=t, tol=CONTACT_TOL
         )
         return sol.x
+
+
+def _state_dependence(kin: ContactKinematics, mechanism: Mechanism) -> np.ndarray:
+    """The right-hand side's Jacobian pattern for Radau: every row may depend on each component of the state that
+    the contact state or the kinematics depend on, on no other. A machine's position along the ground (a robot's
+    base ``x``, ``y``) enters nothing; scipy's finite differences would grow their step there without bound (a
+    column of zeros) until it overflows, so those columns are declared empty."""
+    S = kin.symbols
+    y = ca.vertcat(S["q"], S["v"])
+    out = ca.vertcat(*[ca.vec(ca.SX(S[k])) for k in ("A", "f", "g", "Jn", "phin", "Jt", "phit")], mechanism.qdot)
+    pattern = ca.jacobian(out, y).sparsity()
+    columns = np.diff(np.array(pattern.colind())) > 0
+    return np.ones((y.numel(), 1)) * columns[None, :]
 
 
 def contact_speeds(st: Any, v: np.ndarray) -> np.ndarray:
@@ -396,6 +434,7 @@ def _adaptive(
             rtol=opts.rtol,
             atol=opts.atol,
             events=watched,
+            **({"jac": runner.jacobian(modes)} if runner.method(modes) == "Radau" else {}),
             t_eval=None if times is None else np.append(times[(times > t) & (times < opts.t_end)], opts.t_end),
         )
         failed = sol.status == -1
