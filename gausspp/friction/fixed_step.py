@@ -4,7 +4,7 @@ Each phase runs its compiled graph (:class:`.phase_graph.PhaseGraph`) :data:`.ph
 length ``h`` per call, no Python between the steps. After a chunk the events' values are read at every step's
 end; the first step where one falls through zero is taken again from its start with the length ``h* ∈ [0, h]``
 at which that value is zero (Brent's method on the compiled step), so the event's time and state are those of
-an RK4 step, not of the grid. The modes are then chosen anew (:meth:`._Runner.modes_at`) and the next phase
+an RK4 step, not of the grid. The modes are then chosen anew (:meth:`.runner.Runner.modes_at`) and the next phase
 starts there. A motion that is polynomial of degree ≤ 4 within its phases (a box sliding to rest, a ball
 sliding until it rolls) is integrated exactly, events included.
 """
