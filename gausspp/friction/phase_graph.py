@@ -186,14 +186,30 @@ class PhaseGraph:
                 self.events.append(("starts to slip", i))
         out = ca.vertcat(*N, *F, S["energy"], _least_pivot(ca.SX(S["A"])), *events)
         self.n_contacts, self.n_friction = kin.c, nd
-        rate = ca.Function("rate", [q, v, d], [ca.vertcat(S["qdot"], qdd)])
-        report = ca.Function("report", [q, v, d], [out])
-        y, h, y1, jump = _rk4(rate, d, q.numel(), v.numel(), normalize)
-        nq = q.numel()
-        self.report = report
-        self.step = ca.Function("step", [y, d, h], [y1, report(y1[:nq], y1[nq:], d), jump], {"cse": True})
-        self.chunk = self.step.mapaccum("chunk", CHUNK)
+        #: ``(q, v, d) ↦ (q̇, q̈)``: the phase's right-hand side
+        self.rate = ca.Function("rate", [q, v, d], [ca.vertcat(S["qdot"], qdd)])
+        self.report = ca.Function("report", [q, v, d], [out])
+        self._normalize, self._sizes = normalize, (q.numel(), v.numel(), d)
+        self._steps: tuple[ca.Function, ca.Function] | None = None
         self._c: tuple[ca.Function, ca.Function] | None = None
+
+    @property
+    def step(self) -> ca.Function:
+        """``(y, d, h) ↦ (y⁺, out⁺, jump)``: one RK4 step (built on first use: the adaptive lane needs none)."""
+        return self._stepping()[0]
+
+    @property
+    def chunk(self) -> ca.Function:
+        """:data:`CHUNK` steps in one call (``mapaccum``)."""
+        return self._stepping()[1]
+
+    def _stepping(self) -> tuple[ca.Function, ca.Function]:
+        if self._steps is None:
+            nq, nv, d = self._sizes
+            y, h, y1, jump = _rk4(self.rate, d, nq, nv, self._normalize)
+            step = ca.Function("step", [y, d, h], [y1, self.report(y1[:nq], y1[nq:], d), jump], {"cse": True})
+            self._steps = (step, step.mapaccum("chunk", CHUNK))
+        return self._steps
 
     def compiled(self) -> tuple[ca.Function, ca.Function]:
         """The step and the chunk compiled to C (:func:`gausspp.c_code.c_function`, kept on disk), or themselves
