@@ -74,6 +74,8 @@ class ContactKinematics:
         self.sizes = [(int(x.size1()), int(x.size2())) for x in map(ca.SX, parts)]
         # one flat output: each casadi call from Python, and each output's conversion, costs tens of microseconds
         self.fn = ca.Function("contact_state", [q, v], [ca.vertcat(*[ca.vec(ca.SX(x)) for x in parts])])
+        #: ``(q, v) ↦ (vec A, f, q̇)``: the machine alone (a phase with every contact open asks nothing else)
+        self.free = ca.Function("free", [q, v], [ca.vertcat(ca.vec(ca.SX(mech.A)), ca.SX(mech.f), qdot)])
         #: ``q ↦ g``: the gaps alone (a closing contact's event asks nothing else)
         self.gaps = ca.Function("gaps", [q], [g])
         #: ``q ↦ Σ_j |∂g_i/∂q_j| |q_j|``: the size of the terms each gap adds up (its own scale, :meth:`gap_scales`)
@@ -86,6 +88,7 @@ class ContactKinematics:
         if not getattr(self, "_c", False):
             self.fn = c_function(self.fn) or self.fn
             self.gaps = c_function(self.gaps) or self.gaps
+            self.free = c_function(self.free) or self.free
             self._c = True
 
     def gap_scales(self, q: np.ndarray) -> np.ndarray:

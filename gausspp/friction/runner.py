@@ -67,6 +67,9 @@ class Runner:
         equations: round-off of the squared condition, 1e-11 where this gives 1e-14 on a walker at rest, and the
         adaptive steps shrink to it — 62 steps for 2 s of walker2d standing where this takes 9.)"""
 
+        if all(kind == OPEN for kind in modes.kinds):  # every contact open: the machine alone, no contact data
+            return self._free_rhs(modes)
+
         def f(t: float, y: np.ndarray) -> np.ndarray:
             q, v = self.split(y)
             st = self.kin(q, v)
@@ -76,6 +79,23 @@ class Runner:
                     "mechanism's formulas there"
                 )
             return np.concatenate([np.array(self.qdot(q, v)).ravel(), self.accel(st, modes, v).x])
+
+        return f
+
+    def _free_rhs(self, modes: Modes) -> Any:
+        """``(q̇, A⁻¹f)`` from the mechanism's ``A``, ``f`` and kinematics alone (a flight phase)."""
+        free = self.kin.free
+
+        def f(t: float, y: np.ndarray) -> np.ndarray:
+            flat = np.asarray(free(y[: self.nq], y[self.nq :])).ravel()
+            n = self.nv
+            A, force, qdot = flat[: n * n].reshape(n, n, order="F"), flat[n * n : n * n + n], flat[n * n + n :]
+            if not (np.isfinite(flat).all() and np.isfinite(y).all()):
+                raise NonFiniteError(
+                    f"the state or the forces became non-finite at t={t:.6g} (modes {modes.names()}); check the "
+                    "mechanism's formulas there"
+                )
+            return np.concatenate([qdot, np.linalg.solve(A, force)])
 
         return f
 
