@@ -243,6 +243,43 @@ def quaternion_to_matrix(p: ca.SX) -> ca.SX:
     )
 
 
+def normalize_quaternions(q: ca.SX, slices: list[slice]) -> ca.SX:
+    """``q`` with each quaternion ``q[s]`` (``s`` in ``slices``) of unit length (symbols)."""
+    if not slices:
+        return q
+    parts = [q[i] for i in range(q.numel())]
+    for s in slices:
+        unit = q[s] / ca.norm_2(q[s])
+        for k, i in enumerate(range(s.start, s.stop)):
+            parts[i] = unit[k]
+    return ca.vertcat(*parts)
+
+
+def normalize_quaternion_array(q: np.ndarray, slices: list[slice]) -> np.ndarray:
+    """:func:`normalize_quaternions` on numbers (one configuration, or one per row)."""
+    if not slices:
+        return q
+    out = np.array(q, float, copy=True)
+    for s in slices:
+        out[..., s] /= np.linalg.norm(out[..., s], axis=-1, keepdims=True)
+    return out
+
+
+class QuaternionCoordinates:
+    """For a mechanism whose ``q`` holds unit quaternions at ``self._quaternions`` (slices): :meth:`normalize` and
+    :meth:`normalize_array` bring each back to unit length."""
+
+    _quaternions: list[slice]
+
+    def normalize(self, q: ca.SX) -> ca.SX:
+        """Each quaternion of ``q`` of unit length."""
+        return normalize_quaternions(q, self._quaternions)
+
+    def normalize_array(self, q: np.ndarray) -> np.ndarray:
+        """:meth:`normalize` on numbers (one configuration, or one per row)."""
+        return normalize_quaternion_array(q, self._quaternions)
+
+
 def quaternion_rate(p: Any, w: Any) -> Any:
     """``ṗ = ½ p ⊗ (0, ω)``: a unit quaternion's rate for the angular velocity ``ω`` in the frame ``p`` carries."""
     pw, px, py, pz = p[0], p[1], p[2], p[3]

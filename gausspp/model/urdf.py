@@ -28,7 +28,13 @@ import numpy as np
 
 from ..errors import GaussppError, InputError, UnknownNameError
 from ..validation import number
-from .mechanism import MassMatrix, quaternion_rate, quaternion_to_matrix
+from .mechanism import (
+    MassMatrix,
+    normalize_quaternion_array,
+    normalize_quaternions,
+    quaternion_rate,
+    quaternion_to_matrix,
+)
 from .symbolic import evaluate
 
 #: What to install for :func:`from_urdf`.
@@ -99,18 +105,11 @@ class URDFMechanism(MassMatrix):
 
     def normalize(self, q: ca.SX) -> ca.SX:
         """The floating base's quaternion of unit length (a fixed base: ``q`` itself)."""
-        if not self.floating:
-            return q
-        rho = q[3:7] / ca.norm_2(q[3:7])
-        return ca.vertcat(q[0:3], rho, q[7:])
+        return normalize_quaternions(q, [slice(3, 7)] if self.floating else [])
 
     def normalize_array(self, q: np.ndarray) -> np.ndarray:
         """:meth:`normalize` on numbers (one configuration, or one per row)."""
-        if not self.floating:
-            return q
-        out = np.array(q, float, copy=True)
-        out[..., 3:7] /= np.linalg.norm(out[..., 3:7], axis=-1, keepdims=True)
-        return out
+        return normalize_quaternion_array(q, [slice(3, 7)] if self.floating else [])
 
     def variation_matrix(self) -> ca.SX:
         """The floating base's body velocity ``(u, ω)`` is a quasi-velocity: ``δ(u, ω) = η̇ + ad₍ᵤ,ω₎ η`` with

@@ -16,12 +16,12 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ShapeError
-from ..model.mechanism import Mechanism, quaternion_rate
+from ..model.mechanism import Mechanism, QuaternionCoordinates, quaternion_rate
 from ..model.symbolic import evaluate
 from .bodies import Body
 
 
-class Bodies(Mechanism):
+class Bodies(QuaternionCoordinates, Mechanism):
     """Planar or spatial rigid bodies in maximal coordinates under ``gravity`` (module docstring)."""
 
     def __init__(self, bodies: Sequence[Body], gravity: np.ndarray) -> None:
@@ -67,27 +67,6 @@ class Bodies(Mechanism):
             return ca.SX.zeros(n)
         r, R = b.parts(self.q)
         return evaluate(b.load, (r, R, w, self.t), (n, 1), f"body {b.name!r}: load(r, R, v, t)")
-
-    def normalize(self, q: ca.SX) -> ca.SX:
-        """Each spatial body's quaternion of unit length."""
-        if not self._quaternions:
-            return q
-        parts = [q[i] for i in range(q.numel())]
-        for s in self._quaternions:
-            p = q[s]
-            unit = p / ca.norm_2(p)
-            for k, i in enumerate(range(s.start, s.stop)):
-                parts[i] = unit[k]
-        return ca.vertcat(*parts)
-
-    def normalize_array(self, q: np.ndarray) -> np.ndarray:
-        """:meth:`normalize` on numbers (one configuration, or one per row)."""
-        if not self._quaternions:
-            return q
-        out = np.array(q, float, copy=True)
-        for s in self._quaternions:
-            out[..., s] /= np.linalg.norm(out[..., s], axis=-1, keepdims=True)
-        return out
 
     def variation_matrix(self) -> ca.SX:
         """``δω = η̇ + ω × η`` on each spatial body's rotation, zero elsewhere."""

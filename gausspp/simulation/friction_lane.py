@@ -55,39 +55,27 @@ def check_friction_options(model: Model, **given: Any) -> None:
 
 def _held_rows(model: Model) -> list[FrictionContact]:
     """Each bilateral holonomic row of the model as a :class:`HeldRow`."""
-    mech = model.mechanism
-    out: list[FrictionContact] = []
-    for c, name in zip(model.constraints, model.names, strict=True):
-        rows = ca.SX(c.value(mech.q, mech.t))
-        if ca.depends_on(rows, mech.t):
-            raise InputError(f"gp.simulate: the row {name!r} depends on time: not taken with frictional contacts")
-        for i in range(rows.numel()):
-            fn = ca.Function("g", [mech.q], [rows[i]])
-            label = name if rows.numel() == 1 else f"{name}[{i}]"
-            out.append(HeldRow(gap=lambda q, fn=fn: fn(q), slip=lambda q, v: 0 * v[0], mu=0.0, name=label))
-    return out
+    return _rows_as_contacts(model, model.constraints, model.names, HeldRow, "row")
 
 
 def _limit_contacts(model: Model) -> list[FrictionContact]:
-    """Each one-sided row of the model as a frictionless contact with no slip."""
+    """Each one-sided row of the model as a frictionless contact with no slip (its restitution kept)."""
+    return _rows_as_contacts(model, model.contacts, model.contact_names, FrictionContact, "one-sided row")
+
+
+def _rows_as_contacts(model: Model, constraints: Any, names: list[str], kind: type, what: str) -> list[FrictionContact]:
+    """Each row ``g_i(q)`` of ``constraints`` as a contact of ``kind`` with that gap, no slip and no friction."""
     mech = model.mechanism
-    out = []
-    for c, name in zip(model.contacts, model.contact_names, strict=True):
+    out: list[FrictionContact] = []
+    for c, name in zip(constraints, names, strict=True):
         rows = ca.SX(c.value(mech.q, mech.t))
         if ca.depends_on(rows, mech.t):
-            raise InputError(f"gp.simulate: the one-sided row {name!r} depends on time: not taken with friction")
+            raise InputError(f"gp.simulate: the {what} {name!r} depends on time: not taken with frictional contacts")
         for i in range(rows.numel()):
             fn = ca.Function("g", [mech.q], [rows[i]])
             label = name if rows.numel() == 1 else f"{name}[{i}]"
-            out.append(
-                FrictionContact(
-                    gap=lambda q, fn=fn: fn(q),
-                    slip=lambda q, v: 0 * v[0],
-                    mu=0.0,
-                    name=label,
-                    restitution=c.restitution,
-                )  # fmt: skip
-            )
+            e = getattr(c, "restitution", 0.0)
+            out.append(kind(gap=lambda q, fn=fn: fn(q), slip=lambda q, v: 0 * v[0], mu=0.0, name=label, restitution=e))
     return out
 
 

@@ -38,7 +38,12 @@ import casadi as ca
 import numpy as np
 
 from ...errors import ShapeError
-from ...model.mechanism import Mechanism, quaternion_rate, quaternion_to_matrix
+from ...model.mechanism import (
+    Mechanism,
+    QuaternionCoordinates,
+    quaternion_rate,
+    quaternion_to_matrix,
+)
 
 FREE, BALL, SLIDE, HINGE = 0, 1, 2, 3  # mjtJoint
 
@@ -131,7 +136,7 @@ def frames(bodies: list[TreeBody], q: Any, v: Any) -> Frames:
     return out
 
 
-class JointTree(Mechanism):
+class JointTree(QuaternionCoordinates, Mechanism):
     """A MuJoCo kinematic tree in ``(qpos, qvel)`` (module docstring).
 
     Parameters
@@ -214,26 +219,6 @@ class JointTree(Mechanism):
         return Jv.T @ force + Jw.T @ torque
 
     # -- quaternions ------------------------------------------------------------------------------------------
-    def normalize(self, q: ca.SX) -> ca.SX:
-        """Each free or ball joint's quaternion of unit length."""
-        if not self._quaternions:
-            return q
-        parts = [q[i] for i in range(q.numel())]
-        for s in self._quaternions:
-            unit = q[s] / ca.norm_2(q[s])
-            for k, i in enumerate(range(s.start, s.stop)):
-                parts[i] = unit[k]
-        return ca.vertcat(*parts)
-
-    def normalize_array(self, q: np.ndarray) -> np.ndarray:
-        """:meth:`normalize` on numbers (one configuration, or one per row)."""
-        if not self._quaternions:
-            return q
-        out = np.array(q, float, copy=True)
-        for s in self._quaternions:
-            out[..., s] /= np.linalg.norm(out[..., s], axis=-1, keepdims=True)
-        return out
-
     def variation_matrix(self) -> ca.SX:
         """``δω = η̇ + ω × η`` on each quaternion's angular velocity, zero elsewhere."""
         C = ca.SX.zeros(self.nv, self.nv)
