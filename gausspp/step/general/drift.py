@@ -10,6 +10,13 @@ import casadi as ca
 
 from ..protocol import StepModel
 
+#: Off the manifold by a relative drift δ (an integrator's stage), the redundancy decision's tests of the compiled
+#: steps — a dropped row's sine, its right-hand side's agreement, its residuals' fit — hold to ``DRIFT_SLACK·δ``
+#: beyond their tolerances (:mod:`.compiled`, :mod:`.sparse_pattern`).
+DRIFT_SLACK = 100.0
+#: ... and never by more than this: a state far off the manifold goes to the Python step, which decides on it.
+SLACK_CAP = 1e-4
+
 
 def relative_drift(model: StepModel) -> ca.SX:
     """How far the state is off the constraints, relative: ``max |Φᵢ|/‖Jᵢ‖/(1 + vᵢ)`` and, on holonomic rows,

@@ -38,6 +38,7 @@ import numpy as np
 
 from ..equality.sparse import sparse_reduce
 from ..protocol import StepModel
+from .drift import DRIFT_SLACK, SLACK_CAP, relative_drift
 from .kept_rows import AGREEMENT_SLACK
 from .manifold import REACH_TOL
 from .redundancy import CLEARLY_INDEPENDENT, DEPENDENCE_TOL
@@ -132,6 +133,7 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
     relax = ca.fmin(1, ca.sqrt(smallest) / CLEARLY_INDEPENDENT)
     singular = ca.logic_not(relax > 0)
     if D_rows:
+        slack = ca.fmin(DRIFT_SLACK * relative_drift(model), SLACK_CAP)  # off the manifold by δ: O(δ) (.compiled)
         rho = ca.DM(_combination(len(D_rows)))
         j_rho = rho.T @ Jn[D_rows, :]
         Ainv_j = AinvJnt[:, D_rows] @ rho
@@ -139,11 +141,13 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
         rest = j_rho.T - JnK.T @ combo
         length = ca.sqrt(ca.fmax(ca.dot(j_rho.T, Ainv_j), 1e-300))
         sine = ca.sqrt(ca.fmax(ca.dot(rest, solve_A(rest)), 0)) / length
-        checks.append(ca.logic_or(singular, sine * relax <= DEPENDENCE_TOL))
+        checks.append(ca.logic_or(singular, sine * relax <= DEPENDENCE_TOL + slack))
         y_norm = ca.sqrt(ca.fmax(ca.dot(x, r[K]), 0))  # ‖y‖ of the kept rows' least-norm answer, in A⁻¹
         r_rho = ca.dot(rho, r[D_rows])
         miss = ca.fabs(r_rho - ca.dot(combo, r[K])) - AGREEMENT_SLACK * sine * length * y_norm
-        agree = miss * relax <= tol * ca.fmax(scale, 1e-300) * (ca.sum1(ca.fabs(rho)) + ca.sum1(ca.fabs(combo)))
+        agree = miss * relax <= (tol + slack) * ca.fmax(scale, 1e-300) * (
+            ca.sum1(ca.fabs(rho)) + ca.sum1(ca.fabs(combo))
+        )
         checks.append(ca.logic_or(singular, agree))
         # the witness that the dropped rows hold together: their residuals follow the kept rows' (to first order)
         w = combo / norms[K]  # in the rows' own units: Σ ρ_d J_d/‖J_d‖ ≈ Σ w_i J_i
@@ -158,11 +162,11 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
         # off the manifold (a Runge–Kutta stage) the combined row leaves the kept rows' span by its angle: what that
         # passes of v is not a contradiction
         angle = AGREEMENT_SLACK * ca.norm_2(rest) * ca.norm_2(mech.v) / euclid
-        checks.append(ca.fabs(fit_v) <= REACH_TOL * v_size * ca.sum1(ca.fabs(rho)) + noise + angle)
+        checks.append(ca.fabs(fit_v) <= (REACH_TOL + slack) * v_size * ca.sum1(ca.fabs(rho)) + noise + angle)
         hol = set(model.holonomic_rows)
         if p.g is not None and all(d in hol for d in D_rows) and all(i in hol for i in K):
             fit_g = (ca.dot(rho_u, p.g[D_rows]) - ca.dot(w, p.g[K])) / euclid
-            checks.append(ca.fabs(fit_g) <= REACH_TOL * q_size * ca.sum1(ca.fabs(rho)))
+            checks.append(ca.fabs(fit_g) <= (REACH_TOL + slack) * q_size * ca.sum1(ca.fabs(rho)))
     feasible = ca.mmax(ca.fabs(G @ x - r[K])) / (1 + ca.mmax(ca.fabs(x)))
     checks.append(feasible <= 1e-9)
 
