@@ -77,6 +77,14 @@ class Retargetable:
         self.t_bound = t_bound
         self.status = "running" if self.direction * (t_bound - self.t) > 0 else "finished"
 
+    def moved_to(self, y: Any) -> None:
+        """Go on from the state ``y`` at the same time (a projection onto the constraints after an accepted step),
+        with the derivative there: the first stage of the next step (explicit Runge–Kutta's first-same-as-last,
+        Radau's)."""
+        self.y = y
+        if hasattr(self, "f"):
+            self.f = self.fun(self.t, y)
+
 
 @functools.cache
 def _retargetable(cls: type) -> type:

@@ -61,6 +61,9 @@ class Stabilization:
 
     baumgarte: Baumgarte | None = None
     project: bool = False
+    #: project only where the state's relative drift (:func:`gausspp.step.general.drift.relative_drift`) exceeds
+    #: this (0: after every step, as ``stabilize="project"`` asks); ``gp.simulate``'s default drift control
+    project_above: float = 0.0
 
     @property
     def stab(self) -> tuple[float, float]:
@@ -72,6 +75,8 @@ def as_stabilization(value: object, dt: float | None) -> Stabilization:
     """Accept ``None``, ``"baumgarte"``, ``"project"``, a :class:`Baumgarte`, or a list of these."""
     if value is None or value is False:
         return Stabilization()
+    if isinstance(value, Stabilization):
+        return value
     items = value if isinstance(value, (list, tuple)) else [value]
     baumgarte, project = None, False
     for item in items:

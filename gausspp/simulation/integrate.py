@@ -6,13 +6,14 @@ Both hand back the accepted states (:class:`~gausspp.simulation.samples.Samples`
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import casadi as ca
 import numpy as np
 from scipy.integrate._ivp.rk import RungeKutta
 
-from ..errors import GaussppError, IntegrationError, NonFiniteError
+from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError
 from ..model.model import Model
 from ..workspace import workspace
 from . import compiled_adaptive, crossing, inputs
@@ -57,6 +58,51 @@ def run_python(job: Job) -> Samples:
             break
     progress.close()
     return Samples(ts[:slot], ys[:slot], i, rhs.evaluations, failure, meth.name, rhs.solver)
+
+
+def _step_projection(job: Job, method: str, redundant: bool) -> Callable[[Any], None] | None:
+    """With ``stabilize="project"``: after each accepted step, ``q`` and ``v`` moved back onto the constraints along
+    ``A⁻¹D`` (:func:`gausspp.simulation.initial.projection`) — by ``gp.simulate``'s default drift control only where the
+    state's relative drift exceeds ``stab.project_above`` — and the solver's derivative at the step's end taken
+    anew at the projected state (the first stage of its next step). A record time inside a step is read from the
+    step's own interpolant, off the constraints by what the step drifted. BDF keeps a history of past states that a
+    projection would contradict: refused by name."""
+    if not job.stab.project:
+        return None
+    if method == "BDF":
+        raise InputError(
+            "stabilize='project' with method='BDF': BDF's history of past states cannot follow a projection; use "
+            "Radau or DOP853, or stabilize='baumgarte'"
+        )
+    model = job.model
+    nq, nv, nl = model.nq, model.nv, model.n_lam
+    onto = projection(model, redundant)
+    above = job.stab.project_above
+    drift = _drift_function(model) if above > 0 else None
+
+    def project(solver: Any) -> None:
+        y = solver.y
+        q, v, lam = y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl]
+        if drift is not None and not float(drift(solver.t, q, v, lam, np.zeros(2))) > above:
+            return  # on its constraints to the accuracy asked: nothing to do
+        q, v = onto(solver.t, q, v, lam)
+        if np.array_equal(q, y[:nq]) and np.array_equal(v, y[nq : nq + nv]):
+            return
+        y = y.copy()
+        y[:nq], y[nq : nq + nv] = q, v
+        solver.moved_to(y)
+
+    return project
+
+
+def _drift_function(model: Model) -> ca.Function:
+    """``(t, q, v, λ, stab) ↦`` the state's relative drift (:func:`gausspp.step.general.drift.relative_drift`), kept
+    in the model's workspace."""
+    from ..step.general.drift import relative_drift
+
+    return workspace(model).get(
+        ("relative drift",), lambda: ca.Function("drift", model.inputs, [relative_drift(model)])
+    )
 
 
 def _one_step(
@@ -104,6 +150,7 @@ def run_scipy(job: Job) -> Samples:
         if options["first_step"] is None:
             del options["first_step"]
     solver = Solver(rhs, t0, y0, opts.t_end, **options)
+    project = _step_projection(job, meth.name, redundant)
     watch = crossing.SingularityWatch(model, t0, y0, rhs) if crossing.applies(model) else None
     events: list[dict[str, Any]] = []
     times = None if np.isscalar(opts.record) else np.sort(np.asarray(opts.record, float))  # checked by check_record
@@ -134,6 +181,12 @@ def run_scipy(job: Job) -> Samples:
             )
             break
         steps += 1
+        if project is not None:
+            try:
+                project(solver)
+            except GaussppError as exc:
+                failure = exc
+                break
         if steps == inputs.FORECAST_AFTER:  # a horizon of days is refused, one of hours announced
             try:
                 inputs.check_forecast(meth.name, t0, opts.t_end, solver.t, steps, 8 * y0.size, len(ts))

@@ -50,7 +50,7 @@ def simulate(
     rtol: float = DEFAULT_RTOL,
     atol: float | None = None,
     record: int | Any = 1,
-    constraint_tol: float = 1e-8,
+    constraint_tol: float | None = None,
     throw: bool = True,
     rest_speed: float = 1e-6,
     max_events: int = 10_000,
@@ -80,8 +80,12 @@ def simulate(
         from Python then; ``Trajectory.lane`` says which, and ``lane`` chooses.
     solver : {"qp", "direct"}
         How each step is solved; ``backend`` picks the QP backend.
-    stabilize : None, "baumgarte", "project", Baumgarte, or a list of these
-        Drift control (off by default).
+    stabilize : None, False, "baumgarte", "project", Baumgarte, or a list of these
+        Drift control. ``"project"`` moves ``q`` and ``v`` back onto the constraints along ``A⁻¹D`` after every step
+        (and the initial data first). By default (``None``) an adaptive run at ``rtol`` above 1e-8 of a model with
+        bilateral rows (no contacts) projects after a step whose state drifted by more than 1e-10 relative
+        (:data:`PROJECT_BELOW_DRIFT`): a loosened tolerance gives a faster run that stays on its constraints; at
+        tighter tolerances, and with ``False``, there is no drift control.
     rtol, atol : float
         Tolerances of adaptive methods: a step's error estimate on each component of ``q``, ``v``, ``λ`` within
         ``atol + rtol·|y|``; the works ``W_R``, ``W_F`` are integrated by the same steps and do not choose them.
@@ -99,9 +103,10 @@ def simulate(
         Unilateral contacts only (:mod:`gausspp.simulation.contacts`): an impact that would leave a contact
         slower than ``rest_speed`` ends in rest; a run with more than ``max_events`` events stops.
     constraint_tol : float
-        The accuracy the run promises (default 1e-8): the initial data must keep it, and a run that reached
-        ``t_end`` is a success only if every sample keeps ``|g_i| ≤ constraint_tol·s_g,i`` and
-        ``|Φ_i| ≤ constraint_tol·s_Φ,i`` — each row against its own scale, the size of the terms it adds up
+        The accuracy the run promises (default ``max(1e-8, 10·rtol)``: the accuracy asked for): the initial data
+        must keep it, and a run that reached ``t_end`` is a success only if every sample keeps
+        ``|g_i| ≤ constraint_tol·s_g,i`` and ``|Φ_i| ≤ constraint_tol·s_Φ,i`` — each row against its own scale,
+        the size of the terms it adds up
         (:func:`gausspp.simulation.scales.row_scales`) — and, where the energy balance closes, the balance within
         ``100·constraint_tol`` of the run's energy scale (:func:`gausspp.simulation.scales.energy_scale`);
         otherwise its status is ``"drifted"`` (the trajectory whole, a :class:`~gausspp.DriftWarning`; not raised:
@@ -133,6 +138,7 @@ def simulate(
         return friction_lane.run_friction(
             model, q0, v0, t_end, dt=dt, rtol=rtol, atol=atol, record=record, throw=throw, max_events=max_events
         )
+    constraint_tol = _promised(constraint_tol, rtol)
     opts = check_options(
         model,
         method=method,
@@ -154,7 +160,7 @@ def simulate(
     if not model.contacts and servo_lane.wanted(model, opts.t0, q0, v0):  # reached only through higher
         servo_lane.check_options(opts, stabilize, lam0)  # derivatives: index reduction
         return servo_lane.run_servo(model, q0, v0, opts)
-    stab = as_stabilization(stabilize, opts.dt)
+    stab = as_stabilization(_drift_control(model, stabilize, method, dt, rtol, lane), opts.dt)
     try:
         y0, redundant, chosen, opts = _start(model, q0, v0, lam0, stab, opts)
     except RealizabilityError as exc:  # a servo reached only through higher derivatives: point to index reduction
@@ -208,6 +214,43 @@ def _labelled(lane: str, route: str, run: Callable[[], Trajectory]) -> Trajector
         if isinstance(getattr(exc, "trajectory", None), Trajectory):
             exc.trajectory = replace(exc.trajectory, lane=lane, route=route)  # type: ignore[attr-defined]
         raise
+
+
+#: Below this ``rtol`` a run keeps its constraints by its accuracy alone; above it, the scipy lane projects.
+PROJECT_ABOVE_RTOL = 1e-8
+
+
+def _promised(constraint_tol: Any, rtol: Any) -> Any:
+    """The accuracy a run promises: ``constraint_tol`` as given, else ``max(1e-8, 10·rtol)`` — the accuracy asked
+    for, never tighter than the default's (a number that is not one is left to :func:`check_options`)."""
+    if constraint_tol is not None:
+        return constraint_tol
+    try:
+        r = float(rtol)
+    except (TypeError, ValueError):
+        return 1e-8
+    return max(1e-8, 10.0 * r) if np.isfinite(r) and r > 0 else 1e-8
+
+
+def _drift_control(model: Model, stabilize: Any, method: Any, dt: Any, rtol: Any, lane: Any) -> Any:
+    """``stabilize`` as given; by default, an adaptive run at ``rtol`` above :data:`PROJECT_ABOVE_RTOL` of a model
+    with bilateral rows and no contacts projects onto its constraints after each step (``"project"``): a loosened
+    tolerance then gives a faster run that stays on its constraints. At tighter tolerances the run keeps them by
+    its accuracy and nothing is added."""
+    if stabilize is not None or dt is not None or lane is not None or model.contacts or not getattr(model, "k", 0):
+        return stabilize
+    if method not in (None, "DOP853", "RK45", "RK23", "Radau"):
+        return stabilize
+    try:
+        loose = float(rtol) > PROJECT_ABOVE_RTOL
+    except (TypeError, ValueError):
+        return stabilize
+    return Stabilization(project=True, project_above=PROJECT_BELOW_DRIFT) if loose else stabilize
+
+
+#: The default drift control projects a state whose relative drift exceeds this (and leaves the others alone: on a
+#: machine whose integration keeps its constraints, it costs one drift measure per step).
+PROJECT_BELOW_DRIFT = 1e-10
 
 
 def _start(
