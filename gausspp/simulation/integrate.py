@@ -149,8 +149,8 @@ def run_scipy(job: Job) -> Samples:
         options["first_step"] = initial_step(rhs, Solver, t0, y0, options, opts.t_end - t0)
         if options["first_step"] is None:
             del options["first_step"]
+    project = _step_projection(job, meth.name, redundant)  # refuses BDF before its first evaluation
     solver = Solver(rhs, t0, y0, opts.t_end, **options)
-    project = _step_projection(job, meth.name, redundant)
     watch = crossing.SingularityWatch(model, t0, y0, rhs) if crossing.applies(model) else None
     events: list[dict[str, Any]] = []
     times = None if np.isscalar(opts.record) else np.sort(np.asarray(opts.record, float))  # checked by check_record
