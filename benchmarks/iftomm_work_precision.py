@@ -1,6 +1,6 @@
 """Work-precision of the IFToMM multibody benchmark problems: gausspp beside MuJoCo and Exudyn, in one run.
 
-    .venv/bin/python benchmarks/iftomm_work_precision.py [--quick] [--figure PATH]
+    .venv/bin/python benchmarks/iftomm_work_precision.py [--quick] [--figure PATH] [--problems A01,A04]
 
 Issue 44, item 1. Each problem is written as a user writes it, run from its initial state over ``T = 10`` s
 (``--quick``: 2 s and fewer settings; A03 always over its published 0.03 s), and scored by the benchmark's output
@@ -27,7 +27,8 @@ difference from the reference over the record grid ``t = 0, 0.1, …, T`` (A03: 
   initially; m, Euclidean distance). Reference: no closed form; a gausspp run at ``rtol = atol = 1e-13`` in the
   *other* coordinates — for every row the joint-coordinate run (``from_mjcf``), for the ``from_mjcf`` rows the
   maximal-coordinate run. The two references share gausspp's Gauss step but no model, coordinates or constraint rows;
-  their difference is printed (the floor of the A04 errors).
+  their difference is printed (the floor of the A04 errors, a dotted line in the figure: an error below it is not
+  resolved).
 * **A05 flyball governor** — skipped: examples/bodies_and_joints.py has the machine (41 rows of rank 35, a prescribed
   spindle speed), but no independent reference of its motion exists here (no closed form, no second model in other
   coordinates, no MJCF), and a spindle driven at a prescribed speed is a servo-constraint neither peer model has.
@@ -99,6 +100,7 @@ DTS = [1e-2, 1e-3, 2e-4, 1e-4]
 HS = [1e-2, 1e-3, 2e-4, 1e-4, 5e-5]
 QUICK_RTOLS, QUICK_DTS, QUICK_HS = [1e-6, 1e-10], [1e-2, 1e-3], [1e-2, 1e-3]
 LEVELS = [1e-3, 1e-6, 1e-9]
+FLOORS: dict[str, float] = {}  # a problem's reference floor: how far its two references differ (A04)
 SLOW_S = 5.0  # a first call longer than this is timed once more, not three times
 
 
@@ -577,7 +579,7 @@ def a04(t_end: float, grid: np.ndarray, cfg: argparse.Namespace) -> list[Row]:
         warnings.simplefilter("ignore")
         ref_joint = p3_joint(gp.simulate(machine.model, qj, vj, t_end, **tight).q)
         ref_max = p3_maximal(gp.simulate(model, q0, v0, t_end, **tight).q)
-    floor = distance(ref_joint, ref_max)
+    floor = FLOORS["A04"] = distance(ref_joint, ref_max)
     print(f"  A04 references: the two tight runs (maximal, joint coordinates) differ by {floor:.1e} m", flush=True)
     rows = gausspp_rows(
         "A04", "gausspp", model, q0, v0, t_end, grid, lambda traj: distance(p3_maximal(traj.q), ref_joint), cfg.rtols
@@ -679,9 +681,10 @@ def draw(rows: list[Row], path: str, t_end: float) -> None:
             color, marker = STYLE.get(code, ("k", "x"))
             done = [r for r in rows if r.problem == problem and r.code == code and np.isfinite(r.error)]
             done = [r for r in done if r.status in ("success", "drifted")]
-            if not done:
+            if not done:  # every run failed: said in the legend, the reason in the table
+                ax.plot([], [], "x", color=color, label=f"{code}: failed")
                 continue
-            curve = sorted((r for r in done if r.setting != "defaults"), key=lambda r: r.error)
+            curve = [r for r in done if r.setting != "defaults"]  # in the order of the settings: looser to tighter
             ax.plot([r.error for r in curve], [r.wall_ms / 1e3 for r in curve], "-", color=color, lw=1)
             for r in done:
                 hollow = r.status == "drifted"
@@ -694,6 +697,18 @@ def draw(rows: list[Row], path: str, t_end: float) -> None:
                     ms=9 if r.setting == "defaults" else 6,
                 )
             ax.plot([], [], "-" + marker, color=color, label=code)
+        if problem in FLOORS:
+            ax.axvline(FLOORS[problem], color="0.5", ls=":", lw=1)
+            ax.text(
+                FLOORS[problem],
+                0.02,
+                " reference floor",
+                rotation=90,
+                va="bottom",
+                fontsize=7,
+                color="0.4",
+                transform=ax.get_xaxis_transform(),
+            )
         ax.set(
             xscale="log",
             yscale="log",
