@@ -58,8 +58,9 @@ is the first call, compiling included where a code compiles):
   is not built in Exudyn nor in MuJoCo (seven bodies in three loops and a spring: too much work for this benchmark).
   Status: ``"success"`` if ``SolveDynamic`` reached ``T``.
 
-Printed: per problem the rows (code, setting, wall ms, first call ms, error, status), then for each problem and code
-the fastest wall reaching the errors 1e-3, 1e-6 and 1e-9 (runs that reached ``T``: ``"success"`` or ``"drifted"``).
+Printed: per problem the rows (code, setting, wall ms, first call ms, steps, error, status), then for each problem
+and code the fastest wall reaching the errors 1e-3, 1e-6 and 1e-9 (runs that reached ``T``: ``"success"`` or
+``"drifted"``).
 With ``--figure PATH``: one panel per problem, wall time (log) against error (log), one line per code; the docs'
 figure is docs/work_precision_iftomm.png. A missing peer is said and its rows skipped.
 """
@@ -114,6 +115,7 @@ class Row:
     error: float = math.nan
     status: str = ""
     note: str = ""
+    steps: int = 0  # gausspp: its accepted steps; MuJoCo, Exudyn: T / dt
 
 
 def timed(fn: Callable[[], Any]) -> tuple[Any, float, float]:
@@ -169,7 +171,7 @@ def gausspp_rows(
         except Exception as exc:  # a failure before any trajectory exists
             rows.append(progress(Row(problem, code, setting, status="failed", note=f"{type(exc).__name__}: {exc}")))
             continue
-        row = Row(problem, code, setting, wall, first, status=traj.status)
+        row = Row(problem, code, setting, wall, first, status=traj.status, steps=int(traj.steps))
         if traj.status == "failed":
             at = float(traj.t[-1]) if len(traj.t) else 0.0
             row.note = f"stopped at t = {at:.3g}: {type(traj.failure).__name__}: {traj.failure}"[:200]
@@ -232,6 +234,7 @@ def mujoco_rows(
                     first,
                     distance(np.array(values), reference, angle) if ok else math.nan,
                     "success" if ok else "failed",
+                    steps=per * (len(grid) - 1),
                 )
             )
         )
@@ -307,6 +310,7 @@ def exudyn_rows(
 
         (ok, data), wall, first = timed(run)
         row = Row(problem, "Exudyn", f"gen-α h {h:g}", wall, first, status="success" if ok else "failed")
+        row.steps = settings.timeIntegration.numberOfSteps
         if ok:
             at = [int(np.argmin(np.abs(data[:, 0] - t))) for t in grid]
             if np.abs(data[at, 0] - grid).max() > h / 2:
@@ -619,14 +623,19 @@ def a04(t_end: float, grid: np.ndarray, cfg: argparse.Namespace) -> list[Row]:
 
 
 def print_rows(rows: list[Row]) -> None:
-    print(f"\n{'problem':7s} {'code':20s} {'setting':14s} {'wall ms':>10s} {'1st ms':>10s} {'error':>9s}  status")
-    print("-" * 100)
+    print(
+        f"\n{'problem':7s} {'code':20s} {'setting':14s} {'wall ms':>10s} {'1st ms':>10s} {'steps':>7s} {'error':>9s}"
+        "  status"
+    )
+    print("-" * 108)
     for r in rows:
         error = "" if math.isnan(r.error) else f"{r.error:9.1e}"
         wall = "" if math.isnan(r.wall_ms) else f"{r.wall_ms:10.1f}"
         first = "" if math.isnan(r.first_ms) else f"{r.first_ms:10.1f}"
         note = f"  ({r.note})" if r.note and r.status == "failed" else ""
-        print(f"{r.problem:7s} {r.code:20s} {r.setting:14s} {wall:>10s} {first:>10s} {error:>9s}  {r.status}{note}")
+        steps = f"{r.steps:7d}" if r.steps else ""
+        head = f"{r.problem:7s} {r.code:20s} {r.setting:14s} {wall:>10s} {first:>10s} {steps:>7s} {error:>9s}"
+        print(f"{head}  {r.status}{note}")
 
 
 def fastest(rows: list[Row], level: float) -> Row | None:
