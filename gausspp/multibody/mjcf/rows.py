@@ -2,7 +2,8 @@
 keeps them softly with ``solref``/``solimp``).
 
 * ``connect``: the two anchors coincide, ``x₁ + R₁ a₁ − (x₂ + R₂ a₂) = 0`` (three rows; site semantic: the two
-  sites' positions);
+  sites' positions); a row identically zero — the out-of-plane row of a planar machine's connect — restricts
+  nothing and is left out (MuJoCo keeps it, softly, at zero);
 * ``weld``: the anchors coincide and the relative orientation is ``relpose``: the axial part of
   ``R₂ᵀ R₁ R_rel`` vanishes (six rows; ``torquescale = 0`` keeps the three translational ones);
 * ``joint``: ``q₁ − q₁₀ = c₀ + c₁ d + c₂ d² + c₃ d³ + c₄ d⁴`` with ``d = q₂ − q₂₀`` (or ``q₁ − q₁₀ = c₀`` alone);
@@ -121,7 +122,15 @@ def _pose_rows(load: Loading, tree: JointTree, e: int, weld: bool, key: str, o1:
             rows.append(_vee_skew((R2 @ Rl2).T @ (R1 @ Rl1) @ Rrel))
         return ca.vertcat(*rows)
 
-    return Holonomic(g, name=key)
+    # a row identically zero restricts nothing (a connect's out-of-plane row in a planar machine): left out
+    full = ca.SX(g(tree.q, tree.t))
+    kept = [i for i in range(full.numel()) if not full[i].is_zero()]
+    if not kept:
+        load.problem(f"{key!r} holds nothing: its rows are identically zero (the two anchors move as one)")
+        kept = list(range(full.numel()))
+    if len(kept) == full.numel():
+        return Holonomic(g, name=key)
+    return Holonomic(lambda q, t: ca.vertcat(*[g(q, t)[i] for i in kept]), name=key)
 
 
 def limit_rows(load: Loading, tree: JointTree) -> list[Constraint]:
