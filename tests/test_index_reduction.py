@@ -155,3 +155,20 @@ def test_bad_input_to_index_reduction_is_a_project_error() -> None:
         gp.simulate_servo(model, scene.q0, scene.v0, 1.0, pole=-1.0)
     with pytest.raises(gp.NonFiniteError):
         gp.servo_diagnosis(model, np.inf, scene.q0, scene.v0)
+
+
+def test_the_reach_is_found_in_any_units() -> None:
+    """The spring chain in km/g/cs (masses ×1e3, lengths ×1e-3, times ×1e2): the run's sizes
+    (``gausspp.model.reach_sizes``) find the force in the sixth derivative as in SI. The control: the state's own
+    sizes, 1 in whatever unit (the old test), find no reach there."""
+    from gausspp.model.reach_sizes import reach_sizes
+    from gausspp.step.servo_reach import find_reach, state_sizes
+
+    mass, length, time = 1e3, 1e-3, 1e2
+    params = {"m": 1.0 * mass, "k": 4.0 * mass / time**2, "T": 4.0 * time, "distance": 1.0 * length}
+    for scene in (gp.scenes.get("spring-chain-servo"), gp.scenes.get("spring-chain-servo", **params)):
+        q, v = np.asarray(scene.q0, float), np.asarray(scene.v0, float)
+        sizes = reach_sizes(scene.model, 0.0, q, v, scene.t_end)
+        assert find_reach(scene.model, 0.0, q, v, sizes=sizes).degrees == (6,)
+    with pytest.raises(gp.InputError):  # no actuator reaches the row within the derivatives tried
+        find_reach(scene.model, 0.0, q, v, sizes=state_sizes(scene.model, q, v))

@@ -1,6 +1,6 @@
 """Tolerances that mean the same at every scale (issue 42): at rest, in small motions, in other units.
 
-Every tolerance of a run is measured against a scale read from the machine (:mod:`gausspp.simulation.scales`):
+Every tolerance of a run is measured against a scale read from the machine (:mod:`gausspp.model.run_scales`):
 a pendulum hanging at rest, released 1e-9 rad from it, or rewritten in millimetres, runs with the status and the
 relative accuracy it has in metres."""
 
@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 
 import gausspp as gp
-from gausspp.simulation import scales as run_scales_module
-from gausspp.simulation.scales import row_scales, run_scales
+from gausspp.model import run_scales as run_scales_module
+from gausspp.model.run_scales import row_scales, run_scales
 
 L, EQUILIBRIUM = 1.0, -np.pi / 2  # the pendulum scene: arm of 1 m, hanging at φ = −π/2
 

@@ -2,7 +2,7 @@
 kilogram, metre and second, and each value scaled by the factors of a change of units; and a machine of bodies and
 joints (``gp.Multibody``) built in other units from the same SI numbers (:func:`multibody_in_units`).
 
-Used by the tests of :mod:`gausspp.simulation.scales` (a machine in other units runs with the same status, events
+Used by the tests of :mod:`gausspp.model.run_scales` (a machine in other units runs with the same status, events
 and relative accuracy)."""
 
 from __future__ import annotations
@@ -101,6 +101,64 @@ def relative_error(q: np.ndarray, reference: np.ndarray, labels: tuple[str, ...]
         if size > 0:
             error = max(error, float(np.abs(q[:, cols] - reference[:, cols]).max(initial=0.0) / size))
     return error
+
+
+# --- a robot description in other units ---------------------------------------------------------------------
+
+#: What each URDF attribute carries, as a unit: origins and primitive shapes are lengths, inertias kg·m²; a joint
+#: limit's effort and velocity depend on the joint's type (``_joint_units``).
+_URDF_UNITS = {
+    ("origin", "xyz"): "m",
+    ("mass", "value"): "kg",
+    ("box", "size"): "m",
+    ("cylinder", "radius"): "m",
+    ("cylinder", "length"): "m",
+    ("sphere", "radius"): "m",
+    **{("inertia", key): "kg·m²" for key in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")},
+}
+
+
+def _joint_units(kind: str) -> dict[str, str]:
+    """The units of a joint's ``<limit>`` and ``<dynamics>`` attributes (angles are pure numbers)."""
+    linear = kind == "prismatic"
+    return {
+        "lower": "m" if linear else "rad",
+        "upper": "m" if linear else "rad",
+        "effort": "N" if linear else "N·m",
+        "velocity": "m/s" if linear else "1/s",
+        "damping": "N·s/m" if linear else "N·m·s",
+        "friction": "N" if linear else "N·m",
+    }
+
+
+def urdf_in_units(text: str, mass: float, length: float, time: float) -> str:
+    """A URDF's text with every number rewritten in the new units (lengths ×``length``, masses ×``mass``, times
+    ×``time``): origins, inertials, primitive shapes, joint limits and dynamics; meshes get a ``scale``."""
+    import xml.etree.ElementTree as ET
+
+    root = ET.fromstring(text)
+
+    def scaled(value: str, unit: str) -> str:
+        f = factor(unit, mass, length, time)
+        assert f is not None, unit
+        return " ".join(repr(float(x) * f) for x in value.split())
+
+    for element in root.iter():
+        for attribute, value in list(element.attrib.items()):
+            unit = _URDF_UNITS.get((element.tag, attribute))
+            if unit is not None:
+                element.set(attribute, scaled(value, unit))
+        if element.tag == "mesh":
+            old = [float(x) for x in element.get("scale", "1 1 1").split()]
+            element.set("scale", " ".join(repr(x * length) for x in old))
+    for joint in root.iter("joint"):
+        units = _joint_units(joint.get("type", ""))
+        for tag in ("limit", "dynamics"):
+            for element in joint.iter(tag):
+                for attribute, value in list(element.attrib.items()):
+                    if attribute in units:
+                        element.set(attribute, scaled(value, units[attribute]))
+    return ET.tostring(root, encoding="unicode")
 
 
 # --- a machine of bodies and joints in other units -----------------------------------------------------------

@@ -75,7 +75,7 @@ class Model:
     scales : gp.Scales or dict, optional
         The size of some components' motion where the numbers cannot tell it (``gp.Scales(q=[...], v=[...])``,
         ``None`` entries derived): every tolerance of a run is measured against scales read from the machine at
-        its start (:mod:`gausspp.simulation.scales`); a declared size replaces the one read.
+        its start (:mod:`gausspp.model.run_scales`); a declared size replaces the one read.
     friction : gp.FrictionContact or list of them, optional
         Hard contacts with Coulomb friction (:mod:`gausspp.friction`): ``gp.simulate`` integrates them event by
         event (its friction lane, :func:`gausspp.simulate_friction`). Kept as ``model.friction`` (a tuple).

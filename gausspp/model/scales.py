@@ -1,6 +1,6 @@
 """The scales a model declares where its numbers cannot tell them (docs/guide.md, "The scales of a run").
 
-A run reads every scale it judges by from the machine itself (:mod:`gausspp.simulation.scales`); a model may name
+A run reads every scale it judges by from the machine itself (:mod:`gausspp.model.run_scales`); a model may name
 the size of some of its components instead, e.g. a coordinate that starts at zero but will move far.
 """
 

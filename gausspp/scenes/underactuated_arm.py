@@ -2,7 +2,7 @@
 
 Three revolute joints about ``z`` (shoulder, elbow, wrist; links 0.5, 0.5 and 0.4 m to the tip), in the
 horizontal plane, written here as a URDF (:func:`three_link_urdf`) and read by :func:`~gausspp.from_urdf`.
-The tip's ``x`` and ``y`` follow ``p₀ + (1 − cos 2t) d`` (two coordinates), realized by a Béghin servo
+The tip's ``x`` and ``y`` follow ``p₀ + (1 − cos ωt) d`` (two coordinates), realized by a Béghin servo
 :class:`~gausspp.Force` with two motors, the shoulder and the wrist (``M`` the rows ``e₁``, ``e₃``); the elbow
 is passive. ``J A⁻¹ Mᵀ`` is 2 × 2: the direct formula (``solver="direct"``). On ``[0, 0.5]`` s the realizability
 margin stays near 0.4; continued, the passive elbow is dragged towards a configuration where ``J A⁻¹ Mᵀ`` is
@@ -55,12 +55,15 @@ def three_link_urdf() -> str:
     return f'<robot name="three"><link name="base"/>{body}<link name="tip"/></robot>'
 
 
-def arm_model(mech: Any, d: Any = (0.05, 0.04), q0: Any = Q0) -> Model:
+def arm_model(mech: Any, d: Any = (0.05, 0.04), q0: Any = Q0, omega: float = 2.0) -> Model:
     """The arm ``mech`` (from :func:`three_link_urdf`) with its tip's ``x, y`` on the path, by the two motors."""
-    return Model(mech, tool_path(mech, "tip", np.asarray(q0, float), np.asarray(d, float), MOTORS, coords=(0, 1)))
+    path = tool_path(mech, "tip", np.asarray(q0, float), np.asarray(d, float), MOTORS, coords=(0, 1), omega=omega)
+    return Model(mech, path)
 
 
-def build(d: Any = (0.05, 0.04), t_end: float = 0.5) -> Scene:
+def build(
+    d: Any = (0.05, 0.04), t_end: float = 0.5, omega: float = 2.0, g: float = 9.81, urdf: str | None = None
+) -> Scene:
     """Three-link planar arm, passive elbow: the tip's x, y follow a path by shoulder and wrist (direct formula).
 
     Needs ``pip install 'gausspp[robots]'``.
@@ -68,21 +71,31 @@ def build(d: Any = (0.05, 0.04), t_end: float = 0.5) -> Scene:
     Parameters
     ----------
     d : (2,) array_like
-        Amplitude of the tip's path ``p₀ + (1 − cos 2t) d`` in x and y: the tip moves to ``p₀ + 2d`` and back in
-        π s (m). Allowed: 2 finite numbers.
+        Amplitude of the tip's path ``p₀ + (1 − cos ωt) d`` in x and y: the tip moves to ``p₀ + 2d`` and back in
+        2π/ω (m). Allowed: 2 finite numbers.
     t_end : float
         Suggested horizon of a simulation: the margin stays above 0.3 on the default 0.5 s, near 0.87 s the arm
         meets a singular ``J A⁻¹ Mᵀ`` (s). Allowed: > 0.
+    omega : float
+        Angular frequency ω of the path (1/s). Allowed: > 0.
+    g : float
+        Gravity's magnitude, along the base's −z, normal to the arm's plane (m/s²). Allowed: finite.
+    urdf : str or None
+        Path of the arm's URDF: three joints ``shoulder``, ``elbow``, ``wrist`` and a frame ``tip``, in any units
+        (-). Allowed: None for :func:`three_link_urdf`, or a readable file.
     """
     offset = path_offset("underactuated-arm", d, 2)
-    t_end = positive("t_end", t_end)
-    with tempfile.TemporaryDirectory() as folder:
-        path = Path(folder) / "three_link.urdf"
-        path.write_text(three_link_urdf())
-        mech = from_urdf(str(path))
+    t_end, omega = positive("t_end", t_end), positive("omega", omega)
+    if urdf is not None:
+        mech = from_urdf(urdf, g=g)
+    else:
+        with tempfile.TemporaryDirectory() as folder:
+            path = Path(folder) / "three_link.urdf"
+            path.write_text(three_link_urdf())
+            mech = from_urdf(str(path), g=g)
     return Scene(
         name="underactuated-arm",
-        model=arm_model(mech, offset),
+        model=arm_model(mech, offset, omega=omega),
         q0=np.array(Q0),
         v0=np.zeros(3),
         coordinates=tuple(f"{joint} (rad)" for joint in mech.joint_names),
@@ -90,5 +103,12 @@ def build(d: Any = (0.05, 0.04), t_end: float = 0.5) -> Scene:
         t_end=float(t_end),
         exact=None,
         description="three-link arm, passive elbow: tip path by 2 motors (direct formula)",
-        params={"d": tuple(offset), "t_end": float(t_end), "solver": "direct"},
+        params={
+            "d": tuple(offset),
+            "t_end": float(t_end),
+            "omega": omega,
+            "g": float(g),
+            "urdf": urdf,
+            "solver": "direct",
+        },
     )

@@ -3,7 +3,7 @@
 The UR5 of example-robot-data (:func:`~gausspp.from_urdf`): six revolute joints, ``A(q) q̈ = τ − h(q, v)``.
 The tool frame's position ``p(q)`` follows
 
-    p(t) = p₀ + (1 − cos 2t) d,   p₀ = p(q₀),
+    p(t) = p₀ + (1 − cos ωt) d,   p₀ = p(q₀),
 
 three coordinates, realized by a Béghin servo force :class:`~gausspp.Force` whose directions are the six joint
 torques (``M = I₆``). Six actuators for three path coordinates: the arm is redundant, and Gauss's principle picks,
@@ -48,18 +48,25 @@ def ur5_urdf() -> str:
 
 
 def tool_path(
-    mech: URDFMechanism, frame: str, q0: np.ndarray, d: np.ndarray, motors: Any, coords: Sequence[int] | None = None
+    mech: URDFMechanism,
+    frame: str,
+    q0: np.ndarray,
+    d: np.ndarray,
+    motors: Any,
+    coords: Sequence[int] | None = None,
+    omega: float = 2.0,
 ) -> Holonomic:
-    """The servo-constraint ``p(q)[coords] − (p(q₀)[coords] + (1 − cos 2t) d) = 0`` realized by ``Force(motors)``.
+    """The servo-constraint ``p(q)[coords] − (p(q₀)[coords] + (1 − cos ωt) d) = 0`` realized by ``Force(motors)``.
 
     ``frame`` is a link or frame of ``mech``; ``coords`` the position coordinates prescribed (all three by
-    default); ``motors`` the rows of ``M`` (``R = Mᵀλ``), e.g. ``ca.DM.eye(n)`` for a torque at every joint.
+    default); ``motors`` the rows of ``M`` (``R = Mᵀλ``), e.g. ``ca.DM.eye(n)`` for a torque at every joint;
+    ``omega`` the path's angular frequency (1/s).
     """
     rows = list(range(3)) if coords is None else list(coords)
     p0 = ca.Function("p", [mech.q], [frame_position(mech, frame)[rows]])(q0)
     directions = ca.DM(motors)
     return Holonomic(
-        lambda q, t: frame_position(mech, frame, q)[rows] - (p0 + (1 - ca.cos(2 * t)) * ca.DM(d)),
+        lambda q, t: frame_position(mech, frame, q)[rows] - (p0 + (1 - ca.cos(omega * t)) * ca.DM(d)),
         name=f"{frame} path",
         realization=Force(lambda q, v, t: directions),
     )
@@ -73,7 +80,9 @@ def path_offset(scene: str, d: Any, n: int) -> np.ndarray:
     return vec
 
 
-def build(d: Any = (0.08, 0.05, -0.04), t_end: float = 1.2) -> Scene:
+def build(
+    d: Any = (0.08, 0.05, -0.04), t_end: float = 1.2, omega: float = 2.0, g: float = 9.81, urdf: str | None = None
+) -> Scene:
     """UR5 (example-robot-data): the tool follows a path by its 6 joint torques, redundant (QP, least compulsion).
 
     Needs ``pip install 'gausspp[robots]' example-robot-data``; step and simulate it with ``solver="qp"``.
@@ -81,16 +90,23 @@ def build(d: Any = (0.08, 0.05, -0.04), t_end: float = 1.2) -> Scene:
     Parameters
     ----------
     d : (3,) array_like
-        Amplitude of the tool's path ``p₀ + (1 − cos 2t) d``: the tool moves to ``p₀ + 2d`` and back in π s (m).
+        Amplitude of the tool's path ``p₀ + (1 − cos ωt) d``: the tool moves to ``p₀ + 2d`` and back in 2π/ω (m).
         Allowed: 3 finite numbers.
     t_end : float
         Suggested horizon of a simulation (s). Allowed: > 0.
+    omega : float
+        Angular frequency ω of the path (1/s). Allowed: > 0.
+    g : float
+        Gravity's magnitude, along the base's −z (m/s²). Allowed: finite.
+    urdf : str or None
+        Path of the robot's URDF: a UR5 with a frame ``tool0`` and six joints, in any units (-). Allowed: None for
+        example-robot-data's ``ur5_robot.urdf``, or a readable file.
     """
     offset = path_offset("ur5-tool-path", d, 3)
-    t_end = positive("t_end", t_end)
-    mech = from_urdf(ur5_urdf())
+    t_end, omega = positive("t_end", t_end), positive("omega", omega)
+    mech = from_urdf(ur5_urdf() if urdf is None else urdf, g=g)
     q0 = np.array(Q0)
-    model = Model(mech, tool_path(mech, "tool0", q0, offset, ca.DM.eye(6)))
+    model = Model(mech, tool_path(mech, "tool0", q0, offset, ca.DM.eye(6), omega=omega))
     return Scene(
         name="ur5-tool-path",
         model=model,
@@ -101,5 +117,13 @@ def build(d: Any = (0.08, 0.05, -0.04), t_end: float = 1.2) -> Scene:
         t_end=float(t_end),
         exact=None,
         description="UR5 tool path by 6 joint torques (redundant: QP, least compulsion)",
-        params={"d": tuple(offset), "t_end": float(t_end), "solver": "qp", "stabilize": "baumgarte"},
+        params={
+            "d": tuple(offset),
+            "t_end": float(t_end),
+            "omega": omega,
+            "g": float(g),
+            "urdf": urdf,
+            "solver": "qp",
+            "stabilize": "baumgarte",
+        },
     )

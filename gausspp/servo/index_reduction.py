@@ -28,8 +28,10 @@ from scipy.integrate import solve_ivp
 
 from ..errors import InputError, IntegrationError
 from ..model.model import Model
+from ..model.reach_sizes import reach_sizes
+from ..model.run_scales import ATOL_SHARE
 from ..step.bound import Bound
-from ..step.servo_reach import Reach, find_reach, outputs
+from ..step.servo_reach import Reach, ReachSizes, find_reach, outputs
 from ..validation import positive, record_times
 
 
@@ -51,6 +53,9 @@ class ServoTrajectory:
         Integrators put in front of each actuator (the dynamic extension).
     index : int
         The servo DAE's differentiation index, ``max rᵢ + 1``.
+    work_reaction, work_forces : (N,) arrays
+        The actuators' work ``∫ v·D u dt`` and the non-conservative forces' ``∫ v·F dt`` since ``t0``, integrated with
+        the motion (to its tolerance, not by a quadrature of the samples).
     status, message : str
         ``"success"``, or ``"failed"`` and why (the samples are those computed until then).
     rhs_evaluations : int
@@ -65,6 +70,8 @@ class ServoTrajectory:
     unextended: tuple[int, ...]
     chains: tuple[int, ...]
     index: int
+    work_reaction: np.ndarray
+    work_forces: np.ndarray
     status: str
     message: str
     rhs_evaluations: int
@@ -84,16 +91,18 @@ def feedback(reach: Reach, p: float) -> tuple[ca.SX, ca.SX]:
     return ca.solve(B, -Y), ca.vertcat(*lower)
 
 
-def consistent_start(hidden: ca.SX, reach: Reach, t0: float, z_guess: np.ndarray, tol: float = 1e-12) -> np.ndarray:
-    """The extended state nearest ``z_guess`` on the hidden constraints (Gauss–Newton, minimum-norm steps)."""
+def consistent_start(
+    hidden: ca.SX, reach: Reach, t0: float, z_guess: np.ndarray, size: np.ndarray, tol: float = 1e-12
+) -> np.ndarray:
+    """The extended state nearest ``z_guess`` on the hidden constraints (Gauss–Newton, minimum-norm steps); each
+    hidden row's residual is judged against the terms it adds up, ``Σ_j |∂c_i/∂z_j| max(|z_j|, size_j)``."""
     e = reach.extended
     c_of = ca.Function("hidden", [e.t, e.z], [hidden, ca.jacobian(hidden, e.z)])
     z = np.array(z_guess, float)
     for _ in range(50):
         c, J = (np.array(x, float) for x in c_of(t0, z))
         c = c.ravel()
-        weight = np.abs(J).sum(axis=1)  # each hidden row against the size of the components it depends on
-        scale = 1.0 + np.abs(J) @ np.abs(z) / np.where(weight > 0, weight, 1.0)
+        scale = np.abs(J) @ np.maximum(np.abs(z), size)
         if np.all(np.abs(c) <= tol * scale):
             return z
         z = z - np.linalg.lstsq(J, c, rcond=None)[0]
@@ -113,7 +122,8 @@ def simulate_servo(
     rtol: float = 1e-11,
     atol: Any = 1e-12,
     record: Any = None,
-    pole: float = 1.0,
+    pole: float | None = None,
+    sizes: ReachSizes | None = None,
 ) -> ServoTrajectory:
     """Follow the model's servo-constraints with its actuators, whatever their reach (module docstring).
 
@@ -125,41 +135,48 @@ def simulate_servo(
         A start near the path; it is made consistent with the hidden constraints (and the forces found).
     t_end : float
     rtol, atol : float
-        DOP853's tolerances; ``atol`` may also be one per component of ``(q, v)`` followed by one for the actuators'
-        chain states (``gp.simulate`` passes ``rtol`` times each component's size:
-        :func:`gausspp.simulation.scales.RunScales.atol`).
+        DOP853's tolerances; ``atol`` may also be one per component of ``(q, v)`` (``gp.simulate`` passes ``rtol``
+        times each component's size: :func:`gausspp.model.run_scales.RunScales.atol`), and then the actuators'
+        chain states take ``rtol`` times a tenth of their sizes (:class:`~gausspp.step.servo_reach.ReachSizes`).
     record : array of times, optional
         Where to sample (default: 401 samples).
-    pole : float
-        ``p`` of (1), in 1/s: how fast an integration error along the constraint decays.
+    pole : float, optional
+        ``p`` of (1), in 1/time: how fast an integration error along the constraint decays. Default ``1/τ``, the
+        motion's time scale (:mod:`gausspp.model.reach_sizes`): the same feedback in any units.
+    sizes : ReachSizes, optional
+        The sizes the reach test weighs sensitivities by; default the run's
+        (:func:`gausspp.model.reach_sizes.reach_sizes` over ``t_end − t0``).
     """
-    t_end, pole = float(t_end), positive("pole", pole)
+    t_end = float(t_end)
     if not t_end > t0:
         raise InputError(f"t_end must be after t0={t0}, got {t_end}")
     t, q, v, _ = model.checked_state(t0, q0, v0, None)
-    reach = find_reach(model, t, q, v)
+    sizes = sizes if sizes is not None else reach_sizes(model, t, q, v, t_end - t)
+    pole = positive("pole", pole) if pole is not None else 1.0 / sizes.time
+    reach = find_reach(model, t, q, v, sizes=sizes)
     e = reach.extended
     w, hidden = feedback(reach, pole)
     zdot = ca.substitute(e.zdot, e.w, w)
     force = ca.substitute(e.force, e.w, w)
-    z0 = consistent_start(hidden, reach, t, np.concatenate([q, v, np.zeros(sum(reach.extended.chains))]))
-    rhs = Bound(ca.Function("servo_rhs", [e.t, e.z], ca.cse([zdot])))
+    start = np.concatenate([q, v, np.zeros(sum(reach.extended.chains))])
+    z0 = np.concatenate([consistent_start(hidden, reach, t, start, sizes.state(e.chains)), [0.0, 0.0]])
+    powers = _powers(model, force)
+    rhs = Bound(ca.Function("servo_rhs", [e.t, e.z], ca.cse([ca.vertcat(zdot, ca.substitute(powers, e.w, w))])))
     evaluations = 0
 
     def f(time: float, z: np.ndarray) -> np.ndarray:
         nonlocal evaluations
         evaluations += 1
-        rhs.args[0][0], rhs.args[1][:] = time, z
+        rhs.args[0][0], rhs.args[1][:] = time, z[:-2]
         rhs.eval()
         return rhs.res[0].copy()
 
     grid = np.linspace(t, t_end, 401) if record is None else record_times("simulate_servo", record, t, t_end)
-    if np.ndim(atol):  # (q, v) and one value for the chain states
-        atol = np.concatenate(
-            [np.asarray(atol, float)[:-1], np.full(z0.size - np.size(atol) + 1, np.asarray(atol)[-1])]
-        )
-    sol = solve_ivp(f, (t, t_end), z0, method="DOP853", rtol=rtol, atol=atol, t_eval=grid)
-    Z = sol.y.T
+    chain_atol = ATOL_SHARE * rtol * sizes.state(e.chains)[model.nq + model.nv :]
+    sol = solve_ivp(
+        f, (t, t_end), z0, method="DOP853", rtol=rtol, atol=_atol(atol, chain_atol, z0.size - 2), t_eval=grid
+    )
+    works, Z = sol.y[-2:].T, sol.y[:-2].T
     samples = ca.Function("samples", [e.t, e.z], [force, outputs(model)])  # z starts with the model's own q, v
     forces, ys = (np.array(x, float) for x in samples.map(Z.shape[0])(sol.t[None, :], Z.T))
     nq, nv = model.nq, model.nv
@@ -176,7 +193,29 @@ def simulate_servo(
         unextended=reach.unextended,
         chains=reach.extended.chains,
         index=reach.index,
+        work_reaction=works[:, 0],
+        work_forces=works[:, 1],
         status=status,
         message=message,
         rhs_evaluations=evaluations,
     )
+
+
+def _powers(model: Model, force: ca.SX) -> ca.SX:
+    """The actuators' power ``v·D u`` and the non-conservative forces' ``v·F`` in terms of the extended state."""
+    p, mech = model.expressions, model.mechanism
+    stab = model.inputs[4]
+    D = ca.substitute(p.D, stab, ca.SX.zeros(stab.shape))
+    forces = ca.dot(mech.v, mech.F_nc) if mech.F_nc is not None else ca.SX(0)
+    return ca.vertcat(ca.dot(mech.v, D @ force), forces)
+
+
+def _atol(atol: Any, chain_atol: np.ndarray, size: int) -> np.ndarray:
+    """DOP853's absolute tolerance on the extended state: ``atol`` on each of ``(q, v)`` and ``chain_atol`` on the
+    chain states (a force and its derivatives, sized by the run), or one number for all; none on the two works:
+    they ride on the steps the motion takes (a quadrature of order 8), and their unit is another."""
+    if np.ndim(atol):
+        state = np.concatenate([np.asarray(atol, float), chain_atol])
+    else:
+        state = np.full(size, float(atol))
+    return np.concatenate([state, [np.inf, np.inf]])

@@ -19,8 +19,8 @@ import numpy as np
 
 from ..errors import DriftError
 from ..model.model import Model
+from ..model.run_scales import RunScales, energy_scale, scales_at_first
 from ..workspace import workspace
-from .scales import RunScales, energy_scale, scales_at_first
 
 #: The balance may be off by this times ``drift_tol`` of the energy scale (default: a tenth of it).
 ENERGY_SHARE = 100.0
@@ -56,7 +56,7 @@ def energy_audit(
     """The samples to keep of the first ``n`` and the failure, if the energy balance of ``(t, y)`` (``y``'s last two
     columns the works ``W_R, W_F``; ``energy`` recorded beside) leaves ``ENERGY_SHARE·tol`` of the energy scale
     reached (at least that of the run's first tenth), above its round-off floor
-    (:func:`~gausspp.simulation.scales.energy_scale`)."""
+    (:func:`~gausspp.model.run_scales.energy_scale`)."""
     if n < 2 or not closes(model):
         return n, None
     balance = (energy[:n] - energy[0]) - (y[:n, -2] - y[0, -2]) - (y[:n, -1] - y[0, -1])

@@ -96,9 +96,9 @@ def run_friction(
     if atol is not None:
         options["atol"] = atol
     if model.k:  # the bilateral rows must hold at the start, each against its own scale (as gp.simulate's)
+        from ..model.run_scales import run_scales
         from ..validation import array
         from .initial import check_on_constraint
-        from .scales import run_scales
 
         q, v = array("simulate", "q0", q0).ravel(), array("simulate", "v0", v0).ravel()
         if q.size == model.nq and v.size == model.nv:

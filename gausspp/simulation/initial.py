@@ -13,9 +13,9 @@ import numpy as np
 
 from ..errors import GaussppError, InitialDataError, RealizabilityWarning
 from ..model.model import Model
+from ..model.run_scales import RunScales, row_scales, within
 from ..workspace import workspace
 from .drift import projection_function
-from .scales import RunScales, row_scales, within
 
 #: ``(t, q, v, λ) ↦ (q', v')``: a projection onto the constraint.
 Projection = Callable[[float, np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -121,7 +121,7 @@ def check_on_constraint(
     scales: RunScales | None = None,
 ) -> None:
     """Refuse initial data off a bilateral row by more than ``tol`` of the row's own scale
-    (:func:`~gausspp.simulation.scales.row_scales`; of 1 without ``scales``), naming the row."""
+    (:func:`~gausspp.model.run_scales.row_scales`; of 1 without ``scales``), naming the row."""
     g, Phi = residuals(model, t, q, v, lam)
     if scales is None or model.k == 0:
         s_g, s_Phi, f_g, f_Phi = np.ones_like(g), np.ones_like(Phi), np.zeros_like(g), np.zeros_like(Phi)

@@ -14,10 +14,10 @@ import numpy as np
 
 from ..errors import InputError, IntegrationError, LongRunWarning
 from ..model.model import Model
+from ..model.run_scales import RunScales
 from ..validation import number, positive, record_times
 from . import lanes
 from . import methods as _methods
-from .scales import RunScales
 
 #: A run with more fixed steps than this warns up front (:class:`~gausspp.LongRunWarning`) with the count.
 LONG_RUN_STEPS = 1_000_000
@@ -31,7 +31,7 @@ MAX_KEPT_BYTES = 2**31
 
 #: The default relative tolerance of adaptive runs (``gp.simulate``, ``gausspp run``): the error each step admits on
 #: ``(q, v, λ)`` is ``atol + rtol·|y|``, with ``atol`` by default ``rtol`` times each component's own size
-#: (:func:`gausspp.simulation.scales.RunScales.atol`), so that the tolerance means the same in any units.
+#: (:func:`gausspp.model.run_scales.RunScales.atol`), so that the tolerance means the same in any units.
 DEFAULT_RTOL = 1e-10
 #: ``atol=None``: derived from the run's scales.
 DEFAULT_ATOL = None

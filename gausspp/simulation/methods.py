@@ -59,7 +59,7 @@ class Method:
     iterates : bool
         True if each step solves its stages by iteration (Newton or functional): the iteration cannot converge
         below the round-off of the right-hand side times its conditioning, so its absolute tolerance keeps a floor
-        of ``rtol`` times the machine's size (:meth:`gausspp.simulation.scales.RunScales.atol`).
+        of ``rtol`` times the machine's size (:meth:`gausspp.model.run_scales.RunScales.atol`).
     """
 
     name: str

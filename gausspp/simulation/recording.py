@@ -29,6 +29,7 @@ from ..errors import (
     RealizabilityWarning,
 )
 from ..model.model import Model
+from ..model.run_scales import RunScales
 from ..step.realizability import stacked_margins
 from .contacts import gaps, phase_step
 from .energy_audit import energy_audit
@@ -37,7 +38,6 @@ from .margins import SMALL_MARGIN, audit
 from .residual_audit import residual_audit
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
-from .scales import RunScales
 from .trajectory import Trajectory
 
 #: A recorded trajectory, the failure the recording found (or ``None``), the warnings it has to give.

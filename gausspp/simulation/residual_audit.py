@@ -5,7 +5,7 @@ notices that the motion as a whole has left its constraints. That happens with a
 motion (``rk4`` with ``dt = 10`` on a pendulum: ``|g| = 100``, each step answered) and with a step across a
 singular position that lands off the branch the motion was on. :func:`residual_audit` compares the recorded
 ``g(q, t)`` and ``Φ(q, v, t)`` of every sample with the run's ``drift_tol``, relative to each row's own scale
-(``|g_i| ≤ drift_tol·s_g,i``, ``|Φ_i| ≤ drift_tol·s_Φ,i``, :func:`~gausspp.simulation.scales.row_scales`: the
+(``|g_i| ≤ drift_tol·s_g,i``, ``|Φ_i| ≤ drift_tol·s_Φ,i``, :func:`~gausspp.model.run_scales.row_scales`: the
 size of the terms the row adds up, never the largest coordinate of the state): a method's own drift, ``O(dt⁴)``
 for ``rk4`` or ``O(rtol)`` for an adaptive one, passes; a motion that left the constraint does not. The first
 sample beyond it ends the run as failed with a :class:`~gausspp.DriftError` naming the time, the row and the
@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import DriftError
 from ..model.model import Model
-from .scales import RunScales, row_scales, scales_at_first, within
+from ..model.run_scales import RunScales, row_scales, scales_at_first, within
 
 #: What the fix is, in every message.
 ADVICE = (
@@ -41,7 +41,7 @@ def residual_audit(
 ) -> tuple[int, DriftError | None]:
     """The samples to keep of the first ``n`` and the failure, if a residual of ``g`` or ``Phi`` (each
     ``(N, k)``) exceeds ``tol`` of its row's scale over the samples (NaN counts as beyond it). ``scales``: the
-    run's (:func:`~gausspp.simulation.scales.run_scales`), read at the first sample if not given."""
+    run's (:func:`~gausspp.model.run_scales.run_scales`), read at the first sample if not given."""
     if n == 0 or model.k == 0 or model.bounded:
         return n, None
     s_g, s_Phi, floor_g, floor_Phi = row_scales(model, scales or scales_at_first(model, t, y), t, y, n)

@@ -6,8 +6,8 @@ but the actuators still reach it through the constraint's higher derivatives (do
 :func:`gausspp.step.servo_reach.higher_reach` finds such a reach, :func:`gausspp.simulate` hands the run to the
 index reduction (:func:`gausspp.simulate_servo`) and returns its motion as a :class:`~gausspp.Trajectory`
 like any other: ``u`` the actuator forces, ``a = A⁻¹(f + r₀ + D u)``, the reaction ``D u`` and its compulsion, the
-constraint's values, the energy, and the reaction's work ``W_R = ∫ v·D u dt`` by the cumulative Simpson rule over
-the recorded samples (``Trajectory.lane == "servo"``). Index reduction integrates with DOP853 at the run's
+constraint's values, the energy, and the reaction's work ``W_R = ∫ v·D u dt`` integrated with the motion
+(``Trajectory.lane == "servo"``). Index reduction integrates with DOP853 at the run's
 ``rtol``/``atol`` (a fixed-step method, ``dt``, a stabilization or another solver are refused: index reduction has
 its own feedback, :func:`gausspp.servo.index_reduction.feedback`). There is no one-step realizability margin:
 ``margin`` is NaN.
@@ -19,16 +19,16 @@ import warnings
 from typing import Any
 
 import numpy as np
-from scipy.integrate import cumulative_simpson
 
 from ..errors import GaussppError, InputError, IntegrationError, RealizabilityError, RealizabilityWarning
 from ..model.model import Model
+from ..model.reach_sizes import reach_sizes
+from ..model.run_scales import run_scales
 from ..servo.index_reduction import simulate_servo
 from ..step.servo_reach import actuators_only, higher_reach
 from .inputs import Options
 from .labels import model_labels
 from .recording import failed
-from .scales import ATOL_SHARE, RunScales, run_scales
 from .tolerance import within_tolerance
 from .trajectory import Trajectory
 
@@ -36,9 +36,10 @@ from .trajectory import Trajectory
 LANE = "servo"
 
 
-def wanted(model: Model, t0: float, q0: Any, v0: Any) -> bool:
+def wanted(model: Model, t0: float, q0: Any, v0: Any, horizon: float) -> bool:
     """Whether the run is index reduction's: the one-step solution refuses the start for want of reach, and the
-    actuators reach the constraint through higher derivatives (:func:`~gausspp.step.servo_reach.higher_reach`)."""
+    actuators reach the constraint through higher derivatives (:func:`~gausspp.step.servo_reach.higher_reach`,
+    weighing sensitivities by the sizes of the run over ``horizon``: :mod:`gausspp.model.reach_sizes`)."""
     if not actuators_only(model):  # the cheap part of higher_reach's conditions: most models stop here
         return False
     try:
@@ -47,7 +48,7 @@ def wanted(model: Model, t0: float, q0: Any, v0: Any) -> bool:
             warnings.simplefilter("ignore", RealizabilityWarning)
             model.step(t0, q, v)
     except RealizabilityError:
-        return higher_reach(model, t0, q, v) is not None
+        return higher_reach(model, t0, q, v, reach_sizes(model, t0, q, v, horizon)) is not None
     except GaussppError:
         return False  # the one-step solution reports it
     return False
@@ -67,21 +68,14 @@ def check_options(opts: Options, stabilize: Any, lam0: Any) -> None:
         raise InputError("index reduction's actuators carry no λ state: pass no lam0")
 
 
-def _scaled_atol(model: Model, scales: RunScales, opts: Options) -> np.ndarray:
-    """``rtol`` times each component's size (:mod:`.scales`) on ``(q, v)``, and for the actuators' chain states the
-    same share of the largest generalized force (their derivatives' sizes are not known before the run)."""
-    motion = scales.atol(opts.rtol)
-    chain = ATOL_SHARE * opts.rtol * float(np.max(scales.force, initial=0.0))
-    return np.concatenate([motion[: model.nq + model.nv], [chain if chain > 0 else float(motion.min(initial=1.0))]])
-
-
 def run_servo(model: Model, q0: Any, v0: Any, opts: Options) -> Trajectory:
     """Index reduction's motion as a :class:`~gausspp.Trajectory` (module docstring); raised per ``opts.throw``."""
     record = None if np.isscalar(opts.record) else np.asarray(opts.record, float)
     _t, q, v, lam = model.checked_state(opts.t0, q0, v0, None)
     scales = run_scales(model, opts.t0, q, v, lam, opts.t_end - opts.t0)  # read once: the tolerances and the verdict
-    atol = opts.atol if opts.atol is not None else _scaled_atol(model, scales, opts)
-    servo = simulate_servo(model, q0, v0, opts.t_end, t0=opts.t0, record=record, rtol=opts.rtol, atol=atol)
+    atol = opts.atol if opts.atol is not None else scales.atol(opts.rtol)[: model.nq + model.nv]
+    sizes = reach_sizes(model, opts.t0, q, v, opts.t_end - opts.t0)
+    servo = simulate_servo(model, q0, v0, opts.t_end, t0=opts.t0, record=record, rtol=opts.rtol, atol=atol, sizes=sizes)
     traj = _trajectory(model, servo)
     if servo.status == "success":
         return within_tolerance(model, traj, opts.constraint_tol, scales)
@@ -97,7 +91,7 @@ def _trajectory(model: Model, servo: Any) -> Trajectory:
     """The samples of ``servo`` with the step's quantities evaluated from the model's data at each of them."""
     n, nv, k = servo.t.size, model.nv, model.k
     a, reaction = np.zeros((n, nv)), np.zeros((n, nv))
-    compulsion, energy, power, power_forces = np.zeros(n), np.full(n, np.nan), np.zeros(n), np.zeros(n)
+    compulsion, energy = np.zeros(n), np.full(n, np.nan)
     residual, g = np.zeros((n, k)), np.zeros((n, k))
     no_lam = np.zeros(0)
     for i in range(n):
@@ -106,12 +100,8 @@ def _trajectory(model: Model, servo: Any) -> Trajectory:
         a[i] = np.linalg.solve(d.A, d.f + d.r0 + reaction[i])
         compulsion[i] = float(reaction[i] @ np.linalg.solve(d.A, reaction[i]))
         residual[i], g[i] = d.Phi, d.g
-        power[i], power_forces[i] = float(servo.v[i] @ reaction[i]), d.power
         if model.has_energy:
             energy[i] = d.energy
-
-    def work(p: np.ndarray) -> np.ndarray:
-        return cumulative_simpson(p, x=servo.t, initial=0.0) if n > 2 else np.zeros(n)
 
     return Trajectory(
         t=servo.t.copy(),
@@ -126,8 +116,8 @@ def _trajectory(model: Model, servo: Any) -> Trajectory:
         g=g,
         margin=np.full(n, np.nan),
         energy=energy,
-        work_reaction=work(power),
-        work_forces=work(power_forces) if model.has_force_power else np.full(n, np.nan),
+        work_reaction=servo.work_reaction.copy(),
+        work_forces=servo.work_forces.copy() if model.has_force_power else np.full(n, np.nan),
         status="success",
         message="",
         method="DOP853",

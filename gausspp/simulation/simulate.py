@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import GaussppError, RealizabilityError
 from ..model.model import Model
+from ..model.run_scales import run_scales
 from ..step import servo_reach
 from ..step.outcome import QP_TOLERANCE
 from . import lanes, recording, servo_lane
@@ -29,7 +30,6 @@ from .initial import check_on_constraint, initial_state, project_initial, redund
 from .inputs import DEFAULT_RTOL, Options, check_options, with_scales
 from .rhs import AnyRightHandSide, GeneralRightHandSide, RightHandSide
 from .samples import Samples
-from .scales import run_scales
 from .tolerance import within_tolerance
 from .trajectory import Trajectory
 
@@ -90,7 +90,7 @@ def simulate(
         Tolerances of adaptive methods: a step's error estimate on each component of ``q``, ``v``, ``λ`` within
         ``atol + rtol·|y|``; the works ``W_R``, ``W_F`` are integrated by the same steps and do not choose them.
         ``rtol`` defaults to 1e-10. ``atol`` defaults to ``rtol`` times each component's own size, read from the
-        initial state and the machine (:mod:`gausspp.simulation.scales`): the same relative accuracy in any
+        initial state and the machine (:mod:`gausspp.model.run_scales`): the same relative accuracy in any
         units, for a small motion about an equilibrium as for a large one. A number is an absolute tolerance in
         the state's units, the same for every component.
     record : int or array
@@ -107,8 +107,8 @@ def simulate(
         must keep it, and a run that reached ``t_end`` is a success only if every sample keeps
         ``|g_i| ≤ constraint_tol·s_g,i`` and ``|Φ_i| ≤ constraint_tol·s_Φ,i`` — each row against its own scale,
         the size of the terms it adds up
-        (:func:`gausspp.simulation.scales.row_scales`) — and, where the energy balance closes, the balance within
-        ``100·constraint_tol`` of the run's energy scale (:func:`gausspp.simulation.scales.energy_scale`);
+        (:func:`gausspp.model.run_scales.row_scales`) — and, where the energy balance closes, the balance within
+        ``100·constraint_tol`` of the run's energy scale (:func:`gausspp.model.run_scales.energy_scale`);
         otherwise its status is ``"drifted"`` (the trajectory whole, a :class:`~gausspp.DriftWarning`; not raised:
         :mod:`gausspp.simulation.tolerance`). Every scale is read from the machine (docs/guide.md, "The scales of a
         run"): the same at rest and in motion, in any units.
@@ -157,8 +157,9 @@ def simulate(
         lane=lane,
         drift_tol=drift_tol,
     )
-    if not model.contacts and servo_lane.wanted(model, opts.t0, q0, v0):  # reached only through higher
-        servo_lane.check_options(opts, stabilize, lam0)  # derivatives: index reduction
+    # a servo reached only through higher derivatives: index reduction
+    if not model.contacts and servo_lane.wanted(model, opts.t0, q0, v0, opts.t_end - opts.t0):
+        servo_lane.check_options(opts, stabilize, lam0)
         return servo_lane.run_servo(model, q0, v0, opts)
     stab = as_stabilization(_drift_control(model, stabilize, method, dt, rtol, lane), opts.dt)
     try:

@@ -7,9 +7,9 @@ singular position — and ends the run as failed. ``constraint_tol`` (default 1e
 data must meet) is the accuracy the run promises: every sample must keep
 
 * ``|g_i| ≤ constraint_tol·s_g,i`` and ``|Φ_i| ≤ constraint_tol·s_Φ,i`` for every constraint row, each against
-  its own scale (:func:`~gausspp.simulation.scales.row_scales`),
+  its own scale (:func:`~gausspp.model.run_scales.row_scales`),
 * ``|E − E₀ − W_R − W_F| ≤ ENERGY_SHARE·constraint_tol`` of the run's energy scale where the balance closes
-  (:func:`~gausspp.simulation.scales.energy_scale`), or within its round-off floor.
+  (:func:`~gausspp.model.run_scales.energy_scale`), or within its round-off floor.
 
 A run that finished but broke one of them is not called a success: its status is ``"drifted"``, its message
 names the first sample, the row (or ``"energy balance"``) and the value, and a :class:`~gausspp.DriftWarning`
@@ -27,9 +27,9 @@ import numpy as np
 
 from ..errors import DriftError, DriftWarning
 from ..model.model import Model
+from ..model.run_scales import RunScales, scales_at_first
 from .energy_audit import ENERGY_SHARE, beyond, closes
 from .residual_audit import residual_audit
-from .scales import RunScales, scales_at_first
 from .trajectory import Trajectory
 
 #: The status of a run that reached ``t_end`` with a residual or an energy balance beyond ``constraint_tol``.
@@ -70,7 +70,7 @@ def within_tolerance(
 
 def _energy_beyond(model: Model, traj: Trajectory, y: np.ndarray, tol: float, scales: RunScales) -> DriftError | None:
     """The first sample whose energy balance leaves ``ENERGY_SHARE·tol`` of the whole run's energy scale (above its
-    round-off floor, :func:`~gausspp.simulation.scales.energy_scale`), or ``None``."""
+    round-off floor, :func:`~gausspp.model.run_scales.energy_scale`), or ``None``."""
     if traj.t.size < 2 or not closes(model):
         return None
     balance = traj.energy_balance()

@@ -45,6 +45,37 @@ REACH_TOL = 1e-9
 KIND_TOL = 1e-9
 
 
+@dataclass(frozen=True)
+class ReachSizes:
+    """The sizes the reach test weighs each sensitivity by, so that it means the same in any units.
+
+    Whether ``h`` depends on an input ``w_a`` is read from ``|∂h/∂w_a| S_w,a`` against the largest
+    ``|∂h/∂z_j| S_z,j`` (and ``|∂h/∂t| τ``): every term in the units of ``h``. ``q``, ``v``: each coordinate's and
+    velocity component's size; ``force``: each actuator's; ``time``: the motion's time scale ``τ`` — the ``j``-th
+    derivative of an actuator's force is sized ``S_u / τʲ``. gp.simulate passes the run's sizes
+    (:func:`gausspp.model.reach_sizes.reach_sizes`); :func:`state_sizes` is the fallback."""
+
+    q: np.ndarray
+    v: np.ndarray
+    force: np.ndarray
+    time: float
+
+    def state(self, chains: tuple[int, ...]) -> np.ndarray:
+        """The sizes of the extended state ``z = (q, v, ξ)``."""
+        xi = [self.force[a] / self.time**j for a, c in enumerate(chains) for j in range(c)]
+        return np.concatenate([self.q, self.v, np.asarray(xi, float)])
+
+    def inputs(self, chains: tuple[int, ...]) -> np.ndarray:
+        """The sizes of the inputs ``w``: a force, or the ``c``-th derivative of one behind ``c`` integrators."""
+        return np.array([self.force[a] / self.time**c for a, c in enumerate(chains)], float)
+
+
+def state_sizes(model: StepModel, q: np.ndarray, v: np.ndarray) -> ReachSizes:
+    """The sizes when the run's are not known: each component's own, at least 1 in the model's units, and 1 for a
+    force and for the time scale — good in SI-like units; gp.simulate passes the run's sizes, which hold in any."""
+    return ReachSizes(np.maximum(1.0, np.abs(q)), np.maximum(1.0, np.abs(v)), np.ones(model.m), 1.0)
+
+
 @dataclass
 class Extended:
     """The motion's symbols and derivatives with some actuators delayed by integrators.
@@ -103,6 +134,7 @@ class Reach:
     derivatives: list[list[ca.SX]]  # derivatives[i][j] = yᵢ⁽ʲ⁾ for j < rᵢ (input-free), and yᵢ⁽ʳⁱ⁾ (affine in w)
     B: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # ∂y⁽ʳ⁾/∂w at the state
     unextended: tuple[int, ...] = ()  # the relative degrees before any integrator was added
+    sizes: np.ndarray = field(default_factory=lambda: np.zeros(0))  # each yᵢ⁽ʳⁱ⁾'s size, S_yᵢ / τ^rᵢ
 
     @property
     def index(self) -> int:
@@ -110,36 +142,61 @@ class Reach:
         return max(self.degrees) + 1
 
 
-def _states_near(z0: np.ndarray, count: int = 3) -> list[np.ndarray]:
-    """``z0`` and generic states around it: structure (which input reaches which derivative, the rank of ``B``)
-    is a property of the equations, not of one state — a crane at rest with zero tension would hide it."""
+def _states_near(z0: np.ndarray, size: np.ndarray, count: int = 3) -> list[np.ndarray]:
+    """``z0`` and generic states around it, a tenth of each component's ``size`` away: structure (which input
+    reaches which derivative, the rank of ``B``) is a property of the equations, not of one state — a crane at rest
+    with zero tension would hide it."""
     rng = np.random.default_rng(1989)  # the paper's year: any fixed seed
-    scale = 0.1 * np.maximum(1.0, np.abs(z0))
-    return [z0] + [z0 + scale * rng.standard_normal(z0.size) for _ in range(count)]
+    return [z0] + [z0 + 0.1 * size * rng.standard_normal(z0.size) for _ in range(count)]
 
 
-def _reaches(expr: ca.SX, e: Extended, t0: float, states: list[np.ndarray]) -> np.ndarray:
-    """Which inputs ``expr`` depends on at the states (relative to its dependence on the state)."""
-    grad = ca.Function("grad", [e.t, e.z, e.w], [ca.jacobian(expr, e.w), ca.jacobian(expr, e.z)])
+def _reaches(
+    expr: ca.SX, e: Extended, t0: float, states: list[np.ndarray], sizes: ReachSizes, floor: float
+) -> np.ndarray:
+    """Which inputs ``expr`` depends on at the states: ``|∂h/∂w_a| S_w,a`` against the largest term of its
+    linearization — in the inputs, the state and time, each weighed by its size (:class:`ReachSizes`) — and at least
+    ``floor``, the derivative's own size: a dependence at round-off of the others, or of the motion, is none."""
+    grad = ca.Function(
+        "grad", [e.t, e.z, e.w], [ca.jacobian(expr, e.w), ca.jacobian(expr, e.z), ca.jacobian(expr, e.t)]
+    )
+    size_z, size_w = sizes.state(e.chains), sizes.inputs(e.chains)
     hit = np.zeros(e.w.numel(), dtype=bool)
     for z in states:
-        dw, dz = (np.array(x, dtype=float).ravel() for x in grad(t0, z, np.zeros(e.w.numel())))
-        hit |= np.abs(dw) > REACH_TOL * (1.0 + np.abs(dz).max(initial=0.0))
+        dw, dz, dt = (np.array(x, dtype=float).ravel() for x in grad(t0, z, np.zeros(e.w.numel())))
+        terms = np.abs(dw) * size_w
+        state_terms = max(np.max(np.abs(dz) * size_z, initial=0.0), np.abs(dt).sum() * sizes.time)
+        largest = max(terms.max(initial=0.0), state_terms, floor)
+        hit |= terms > REACH_TOL * largest
     return hit
 
 
-def measure_reach(model: StepModel, t0: float, z0: np.ndarray, chains: tuple[int, ...], max_degree: int) -> Reach:
+def _size(y: ca.SX, e: Extended, t0: float, states: list[np.ndarray], sizes: ReachSizes) -> float:
+    """The size of a constrained quantity: the terms of its linearization in the state and time, each weighed by its
+    size, the largest over the states (its ``j``-th derivative is sized this over ``τʲ``)."""
+    grad = ca.Function("size", [e.t, e.z], [ca.jacobian(y, e.z), ca.jacobian(y, e.t)])
+    size_z = sizes.state(e.chains)
+    largest = 0.0
+    for z in states:
+        dz, dt = (np.array(x, dtype=float).ravel() for x in grad(t0, z))
+        largest = max(largest, float(np.abs(dz) @ size_z + np.abs(dt).sum() * sizes.time))
+    return largest
+
+
+def measure_reach(
+    model: StepModel, t0: float, z0: np.ndarray, chains: tuple[int, ...], max_degree: int, sizes: ReachSizes
+) -> Reach:
     """The relative degrees and derivatives with ``chains`` integrators (``z0``: the extended state)."""
     e = extended_motion(model, chains)
     y = outputs(model)
-    states = _states_near(np.asarray(z0, float))
-    degrees, derivatives = [], []
+    states = _states_near(np.asarray(z0, float), sizes.state(chains))
+    degrees, derivatives, top_sizes = [], [], []
     for i in range(y.numel()):
         chain, h = [], y[i]
+        size_y = _size(y[i], e, t0, states, sizes)
         for _ in range(max_degree):
             chain.append(h)
             h = lie(h, e)
-            hit = _reaches(h, e, t0, states)
+            hit = _reaches(h, e, t0, states, sizes, size_y / sizes.time ** len(chain))
             if hit.any():
                 break
             h = ca.substitute(h, e.w, ca.SX.zeros(e.w.shape))  # a vanishing dependence: none at all
@@ -149,11 +206,24 @@ def measure_reach(model: StepModel, t0: float, z0: np.ndarray, chains: tuple[int
                 "the servo cannot keep it with these actuators"
             )
         degrees.append(len(chain))
+        top_sizes.append(size_y / sizes.time ** len(chain))
         derivatives.append([*chain, h])
     top = ca.vertcat(*[d[-1] for d in derivatives])
     B_of = ca.Function("B", [e.t, e.z, e.w], [ca.jacobian(top, e.w)])
     candidates = [np.array(B_of(t0, z, np.zeros(e.w.numel()))) for z in states]
-    return Reach(e, tuple(degrees), derivatives, max(candidates, key=_conditioning))  # the generic rank
+    size_w = sizes.inputs(chains)
+    row_sizes = np.array(top_sizes)
+    B = max(candidates, key=lambda B: _conditioning(_weighed(B, size_w, row_sizes)))  # the generic rank
+    return Reach(e, tuple(degrees), derivatives, B, sizes=row_sizes)
+
+
+def _weighed(B: np.ndarray, size_w: np.ndarray, row_sizes: np.ndarray) -> np.ndarray:
+    """``B`` with each input's column times its size and each row (a derivative in its own units) scaled to a
+    largest entry of 1, or divided by the derivative's size where that is larger: the same numbers in any units,
+    and a row at round-off of its size stays at round-off."""
+    W = B * size_w[None, :]
+    rows = np.maximum(np.abs(W).max(axis=1, initial=0.0), row_sizes)
+    return W / np.where(rows > 0, rows, 1.0)[:, None]
 
 
 def _conditioning(B: np.ndarray) -> float:
@@ -164,19 +234,30 @@ def _conditioning(B: np.ndarray) -> float:
     return float(sv[-1] / sv[0]) if sv[0] > 0 else 0.0
 
 
-def find_reach(model: StepModel, t0: float, q0: np.ndarray, v0: np.ndarray, max_extensions: int = 8) -> Reach:
-    """The relative degrees, extending the actuators that appear while the decoupling matrix is singular."""
+def find_reach(
+    model: StepModel,
+    t0: float,
+    q0: np.ndarray,
+    v0: np.ndarray,
+    max_extensions: int = 8,
+    sizes: ReachSizes | None = None,
+) -> Reach:
+    """The relative degrees, extending the actuators that appear while the decoupling matrix is singular
+    (``sizes``: the run's, :class:`ReachSizes`; by default :func:`state_sizes`)."""
+    sizes = sizes if sizes is not None else state_sizes(model, q0, v0)
     n_state = model.nq + model.nv
     chains = tuple(0 for _ in range(model.m))
     unextended: tuple[int, ...] = ()
     for _ in range(max_extensions + 1):
         xi0 = np.zeros(sum(chains))
-        reach = measure_reach(model, t0, np.concatenate([q0, v0, xi0]), chains, 2 * n_state + 2 * sum(chains) + 2)
+        z0 = np.concatenate([q0, v0, xi0])
+        reach = measure_reach(model, t0, z0, chains, 2 * n_state + 2 * sum(chains) + 2, sizes)
         unextended = unextended or reach.degrees
-        if _conditioning(reach.B) > REACH_TOL:
+        weighed = _weighed(reach.B, sizes.inputs(chains), reach.sizes)
+        if _conditioning(weighed) > REACH_TOL:
             reach.unextended = unextended
             return reach
-        appear = np.abs(reach.B).max(axis=0) > REACH_TOL * max(np.abs(reach.B).max(), 1.0)
+        appear = np.abs(weighed).max(axis=0) > REACH_TOL
         if not appear.any():
             break
         chains = tuple(c + 1 if hit else c for c, hit in zip(chains, appear, strict=True))
@@ -225,7 +306,7 @@ def actuators_only(model: StepModel) -> bool:
     )
 
 
-def higher_reach(model: StepModel, t: float, q: Any, v: Any) -> Reach | None:
+def higher_reach(model: StepModel, t: float, q: Any, v: Any, sizes: ReachSizes | None = None) -> Reach | None:
     """How the actuators reach the constraint when only its higher derivatives feel them (index above 3, or
     integrators needed in front of an actuator); ``None`` where the one-step solution is the one (or nothing
     reaches): only actuators (force realizations, as many as rows, no λ, no contacts or bounds) can be out of
@@ -234,10 +315,11 @@ def higher_reach(model: StepModel, t: float, q: Any, v: Any) -> Reach | None:
         return None
     q, v = np.asarray(q, float), np.asarray(v, float)
     J = evaluate_J(model, t, q, v)
-    if np.linalg.matrix_rank(J) < model.k:  # redundant rows, not a question of reach
+    norms = np.linalg.norm(J, axis=1)
+    if np.linalg.matrix_rank(J / np.where(norms > 0, norms, 1.0)[:, None]) < model.k:  # redundant rows, not reach
         return None
     try:
-        reach = find_reach(model, t, q, v, max_extensions=4)
+        reach = find_reach(model, t, q, v, max_extensions=4, sizes=sizes)
     except (InputError, RuntimeError):  # no actuator reaches it
         return None
     return None if reach.index <= 3 and not any(reach.extended.chains) else reach

@@ -103,9 +103,14 @@ def _kinematics(model: StepModel) -> Kinematics:
 
 
 def _correction(A: np.ndarray, J: np.ndarray, D: np.ndarray, residual: np.ndarray) -> np.ndarray:
-    """The least-squares move along ``A⁻¹D`` that removes ``residual`` of the rows ``J`` to first order."""
+    """The least-squares move along ``A⁻¹D`` that removes ``residual`` of the rows ``J`` to first order (each row
+    scaled to unit length first: rows of different units — a point's, an axis's — weigh the same, and the rank
+    cut-off means the same in any units)."""
     AinvD = dense.solve(A, D)
-    return AinvD @ dense.lstsq(J @ AinvD, residual, 1e-10)
+    M = J @ AinvD
+    norms = np.sqrt(np.einsum("ij,ij->i", M, M))
+    norms = np.where(norms > 0, norms, 1.0)
+    return AinvD @ dense.lstsq(M / norms[:, None], residual / norms, 1e-10)
 
 
 def _project_positions(

@@ -57,7 +57,7 @@ import numpy as np
 from ..workspace import workspace
 
 if TYPE_CHECKING:
-    from ..model.model import Model
+    from .model import Model
 
 EPS = float(np.finfo(float).eps)
 #: An adaptive step's absolute tolerance is never below this times the machine's round-off floor ``M``.
@@ -144,8 +144,10 @@ def run_scales(
     kinetic = np.nan_to_num(0.5 * v * (A @ v)) if A.size else np.zeros(model.nv)
     k_q = coupling.part_max(q_v**2 * mass)
     # a part whose coordinates all start at zero: the way its motion, else its forces, take it in the run
-    k_q = np.where(k_q > 0, k_q, 2.0 * coupling.part_sum(np.maximum(kinetic, 0.0)) * horizon**2)
-    k_q = np.where(k_q > 0, k_q, coupling.part_max(np.nan_to_num(force**2 / diag)) * horizon**4)
+    with np.errstate(over="ignore"):  # an absurd horizon gives infinite sizes, not an OverflowError
+        span = np.float64(horizon)
+        k_q = np.where(k_q > 0, k_q, 2.0 * coupling.part_sum(np.maximum(kinetic, 0.0)) * span**2)
+        k_q = np.where(k_q > 0, k_q, coupling.part_max(np.nan_to_num(force**2 / diag)) * span**4)
     targets = _targets(model, t, q, v, lam, data, horizon)
     reach_g, reach_Phi = _target_reach(model, t, q, v, lam, targets)
     k_q = np.where(k_q > 0, k_q, coupling.part_max(reach_g**2 * mass))
