@@ -158,7 +158,9 @@ def test_painleve_is_refused_in_fixed_steps_just_inside_and_resolved_by_short_st
     run = gp.simulate_friction(mech, contacts, q0, v0, 2e-7, step=1e-9)
     assert run.success and abs(run.events[0]["t"] - ref.events[0]["t"]) <= 1e-8 * ref.events[0]["t"]
     if theta == 1.3:
-        with pytest.raises(gp.IntegrationError, match="too long for the phase at t=0.001") as too_long:
+        # where within the first step the guard names the failure (its end, or the slip's stop an event search
+        # found inside it, ~2.5e-8 s) depends on round-off at a rate of ~1e40: the message and the kept start do not
+        with pytest.raises(gp.IntegrationError, match="step h=0.001 is too long for the phase at t=") as too_long:
             gp.simulate_friction(mech, contacts, q0, v0, 0.01, step=1e-3)
         assert too_long.value.run.t.tolist() == [0.0]  # the start is kept
 

@@ -175,7 +175,7 @@ def _adaptive(
         _keep(runner, rec, modes, [t], [y])  # the phase's start, kept if the phase fails
         watched = runner.events(modes, y)
         sol = solve_ivp(
-            runner.rhs(modes),
+            runner.compiled_rhs(modes, y, opts.codegen) or runner.rhs(modes),
             (t, opts.t_end),
             y,
             method=runner.method(modes),

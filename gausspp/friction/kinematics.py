@@ -19,7 +19,25 @@ from ..errors import InputError, NonFiniteError
 from ..model.friction_contact import FrictionContact
 from ..model.mechanism import Mechanism
 from ..model.symbolic import evaluate
+from ..step.bound import Bound, dense_outputs
 from ..step.outcome import not_positive_definite
+
+
+class Called:
+    """A compiled function of numpy arrays called through its bound buffers (:class:`~gausspp.step.bound.Bound`):
+    a plain casadi call from Python and its conversion of the result cost tens of microseconds, this about one.
+    Returns a copy of the one dense output."""
+
+    def __init__(self, fn: ca.Function) -> None:
+        self.fn = fn
+        self.bound = Bound(fn)
+
+    def __call__(self, *args: np.ndarray) -> np.ndarray:
+        bound = self.bound
+        for target, value in zip(bound.args, args, strict=True):
+            target[:] = value
+        bound.eval()
+        return bound.res[0].copy()
 
 
 @dataclass(frozen=True)
@@ -72,12 +90,15 @@ class ContactKinematics:
         self.symbols = dict(zip(("A", "f", "g", "gdot", "Jn", "phin", "s", "Jt", "phit", "energy"), parts, strict=True))
         self.symbols.update(q=q, v=v, qdot=qdot)
         self.sizes = [(int(x.size1()), int(x.size2())) for x in map(ca.SX, parts)]
-        # one flat output: each casadi call from Python, and each output's conversion, costs tens of microseconds
-        self.fn = ca.Function("contact_state", [q, v], [ca.vertcat(*[ca.vec(ca.SX(x)) for x in parts])])
+        # one flat output, called through bound buffers (Called): each casadi call from Python, and each output's
+        # conversion, costs tens of microseconds
+        self.fn = Called(_dense("contact_state", [q, v], ca.vertcat(*[ca.vec(ca.SX(x)) for x in parts])))
         #: ``(q, v) ↦ (vec A, f, q̇)``: the machine alone (a phase with every contact open asks nothing else)
-        self.free = ca.Function("free", [q, v], [ca.vertcat(ca.vec(ca.SX(mech.A)), ca.SX(mech.f), qdot)])
+        self.free = Called(_dense("free", [q, v], ca.vertcat(ca.vec(ca.SX(mech.A)), ca.SX(mech.f), qdot)))
         #: ``q ↦ g``: the gaps alone (a closing contact's event asks nothing else)
-        self.gaps = ca.Function("gaps", [q], [g])
+        self.gaps = Called(_dense("gaps", [q], g))
+        #: ``(q, v) ↦ q̇``
+        self.qdot = Called(_dense("qdot", [q, v], qdot))
         #: ``q ↦ Σ_j |∂g_i/∂q_j| |q_j|``: the size of the terms each gap adds up (its own scale, :meth:`gap_scales`)
         self._gap_terms = ca.Function("gap_terms", [q], [ca.mtimes(ca.fabs(ca.jacobian(g, q)), ca.fabs(q))])
 
@@ -86,9 +107,11 @@ class ContactKinematics:
         from ..c_code import c_function
 
         if not getattr(self, "_c", False):
-            self.fn = c_function(self.fn) or self.fn
-            self.gaps = c_function(self.gaps) or self.gaps
-            self.free = c_function(self.free) or self.free
+            for name in ("fn", "gaps", "free", "qdot"):
+                called = getattr(self, name)
+                compiled = c_function(called.fn)
+                if compiled is not None:
+                    setattr(self, name, Called(compiled))
             self._c = True
 
     def gap_scales(self, q: np.ndarray) -> np.ndarray:
@@ -96,7 +119,7 @@ class ContactKinematics:
         return np.asarray(self._gap_terms(q), float).ravel()
 
     def __call__(self, q: np.ndarray, v: np.ndarray) -> ContactState:
-        flat = self.fn(q, v).full().ravel()
+        flat = self.fn(q, v)
         out, k = [], 0
         for rows, cols in self.sizes:  # casadi's vec is column-major
             out.append(flat[k : k + rows * cols].reshape((rows, cols), order="F"))
@@ -123,8 +146,7 @@ class ContactKinematics:
         for what, value in (("the mass matrix A", st.A), ("the forces f", st.f)):
             if not np.all(np.isfinite(value)):
                 raise NonFiniteError(f"{what} is not finite at t={t:.6g}; check the mechanism's formulas there")
-        whole = (st.g, st.gdot, st.Jn, st.phin, *st.s, *st.Jt, *st.phit)
-        if all(np.isfinite(x).all() for x in whole):  # the usual case, checked at once
+        if np.isfinite(self.fn.bound.res[0]).all():  # the usual case: the call's whole output, checked at once
             names = []
         for i, name in enumerate(names):
             parts = (st.g[i], st.gdot[i], st.Jn[i], st.phin[i], st.s[i], st.Jt[i], st.phit[i])
@@ -140,3 +162,8 @@ class ContactKinematics:
         if np.abs(st.A - st.A.T).max() > 1e-12 * np.abs(st.A).max():
             raise not_positive_definite(st, t)
         return st
+
+
+def _dense(name: str, inputs: list[ca.SX], output: ca.SX) -> ca.Function:
+    """A function with one output, every entry stored (the bound buffer is read as the dense vector)."""
+    return ca.Function(name, inputs, dense_outputs([ca.vec(ca.SX(output))]))

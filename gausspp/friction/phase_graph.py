@@ -75,11 +75,17 @@ def _forces(
         else:
             cols.append(Jn[i, :].T - contacts[i].mu * Jt[part, :].T @ di)
     A, f = ca.SX(S["A"]), ca.SX(S["f"])
-    x0 = ca.solve(A, f)
+    D, LT, perm = ca.ldl(A)  # A = L D Lᵀ (permuted): half the operations of a QR, and no square root — an A that
+    # stops being positive definite still gives numbers, and the report's least pivot names it
+
+    def solve_A(X: ca.SX) -> ca.SX:
+        return ca.ldl_solve(X, D, LT, perm)
+
+    x0 = solve_A(f)
     out: dict[str, Any] = {"q": q, "v": v, "x0": x0, "dirs": dirs, "where": where}
     if cols:
         C, R = ca.horzcat(*cols), ca.vertcat(*rows)
-        out["AinvC"] = ca.solve(A, C)
+        out["AinvC"] = solve_A(C)
         out["M"] = R @ out["AinvC"]
         out["b"] = ca.vertcat(*rhs) - R @ x0
     return out
@@ -100,6 +106,15 @@ def kept_rows(M: np.ndarray) -> tuple[int, ...]:
     diag = np.abs(np.diag(r))
     rank = int(np.sum(diag > RANK_TOL * max(diag[0], 1e-300)))
     return tuple(sorted(int(p) for p in perm[:rank]))
+
+
+def _least_norm(M: ca.SX, b: ca.SX) -> ca.SX:
+    """The least-norm solution of ``M u = b`` (``M`` of full row rank): ``Mᵀ = Q R`` by casadi's Gram–Schmidt QR,
+    orthogonalized twice ("twice is enough": ``Q`` orthonormal to round-off), ``u = Q R⁻ᵀ b`` — the condition of
+    ``M``, not its square as in the normal equations ``Mᵀ(MMᵀ)⁻¹b``."""
+    Q1, R1 = ca.qr(M.T)
+    Q, R2 = ca.qr(Q1)
+    return Q @ ca.solve((R2 @ R1).T, b)
 
 
 def _least_pivot(A: ca.SX) -> ca.SX:
@@ -154,9 +169,11 @@ class PhaseGraph:
         q, v, S, o = P["q"], P["v"], kin.symbols, kin.offsets
         u = ca.SX(0, 1)
         qdd = P["x0"]
+        #: whether the kept rows form a square system (solved by casadi's QR; else by the normal equations)
+        self.square = "M" in P and len(kept) == P["M"].size2() == P["M"].size1()
         if "M" in P:
             Mr, br = P["M"][list(kept), :], P["b"][list(kept)]
-            u = ca.solve(Mr, br) if Mr.size1() == Mr.size2() else Mr.T @ ca.solve(Mr @ Mr.T, br)
+            u = ca.solve(Mr, br) if Mr.size1() == Mr.size2() else _least_norm(Mr, br)
             qdd = P["x0"] + P["AinvC"] @ u
         N = [ca.SX(0)] * kin.c
         F = [ca.SX.zeros(int(k)) for k in kin.dims]
@@ -192,6 +209,12 @@ class PhaseGraph:
         self._normalize, self._sizes = normalize, (q.numel(), v.numel(), d)
         self._steps: tuple[ca.Function, ca.Function] | None = None
         self._c: tuple[ca.Function, ca.Function] | None = None
+
+    def rate_c(self) -> ca.Function:
+        """:attr:`rate` as C where a compiler is (:mod:`gausspp.c_code`; else the virtual machine's), built once."""
+        if getattr(self, "_rate_c", None) is None:
+            self._rate_c = c_function(self.rate) or self.rate
+        return self._rate_c
 
     @property
     def step(self) -> ca.Function:
