@@ -45,7 +45,7 @@ from .errors import (
 
 if TYPE_CHECKING:  # what the names below are, for type checkers and editors
     from . import friction, plot, scenes, servo
-    from .friction import FrictionContact, FrictionRun, simulate_friction
+    from .friction import FrictionContact, FrictionRun, JointFriction, simulate_friction
     from .model.constraints import Constraint, Holonomic, Unilateral
     from .model.from_sympy import SympyModel, from_sympy
     from .model.mechanism import Lagrangian, MassMatrix, Mechanism, RigidBody
@@ -90,6 +90,7 @@ _MODULES = {
 _NAMES = {
     "FrictionContact": "gausspp.friction",
     "FrictionRun": "gausspp.friction",
+    "JointFriction": "gausspp.friction",
     "simulate_friction": "gausspp.friction",
     "Constraint": "gausspp.model.constraints",
     "Holonomic": "gausspp.model.constraints",
@@ -149,6 +150,7 @@ __all__ = [
     "Force",
     "FrictionContact",
     "FrictionRun",
+    "JointFriction",
     "from_mjcf",
     "from_sympy",
     "GaussppError",

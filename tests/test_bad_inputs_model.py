@@ -223,7 +223,7 @@ DAMPED_AND_UNMAPPABLE = """
   <worldbody>
     <geom type="plane" size="1 1 0.1"/>
     <body name="a" pos="0 0 1">
-      <joint name="hinge_a" type="hinge" axis="0 0 1" damping="0.5" frictionloss="0.1"/>
+      <joint name="hinge_a" type="hinge" axis="0 0 1" damping="0.5"/>
       <geom type="sphere" size="0.1"/>
       <body name="b" pos="0.5 0 0">
         <joint name="turn" type="hinge" axis="0 1 0"/>
@@ -232,19 +232,20 @@ DAMPED_AND_UNMAPPABLE = """
       </body>
     </body>
   </worldbody>
+  <tendon><fixed name="rope" frictionloss="0.1"><joint joint="hinge_a" coef="1"/></fixed></tendon>
 </mujoco>
 """
 
 
 @needs["mujoco"]
 def test_from_mjcf_lists_every_problem_at_once_and_maps_the_joint_set() -> None:
-    """The body with a hinge and a slide (refused in rounds by the old loader) is mapped now; the joint's
+    """The body with a hinge and a slide (refused in rounds by the old loader) is mapped now; the tendon's
     frictionloss and the cylinder's contact are listed in one message."""
     from gausspp.multibody.mjcf import from_mjcf
 
     with pytest.raises(InputError) as info:
         from_mjcf(DAMPED_AND_UNMAPPABLE)
     message = str(info.value)
-    assert "'hinge_a'" in message and "frictionloss" in message and "'drum'" in message and "cylinder" in message
+    assert "'rope'" in message and "frictionloss" in message and "'drum'" in message and "cylinder" in message
     free = DAMPED_AND_UNMAPPABLE.replace(' frictionloss="0.1"', "")
     assert from_mjcf(free, contacts="ignore").model.nv == 3

@@ -493,9 +493,11 @@ REFUSED = {
         ),  # fmt: skip
         r"tendon 'cable' is a spatial tendon with stiffness or damping",
     ),
-    "frictionloss": (
-        pendulum(joints='<joint name="pivot" axis="0 1 0" frictionloss="0.1"/>'),
-        r"'pivot' have frictionloss",
+    "tendon frictionloss": (
+        pendulum(
+            after='<tendon><fixed name="rope" frictionloss="0.1"><joint joint="pivot" coef="1"/></fixed></tendon>'
+        ),  # fmt: skip
+        r"tendon\(s\) 'rope' have frictionloss",
     ),
     "filtered actuator": (
         pendulum(after='<actuator><general name="slow" joint="pivot" dyntype="filter" dynprm="0.1"/></actuator>'),
@@ -534,19 +536,19 @@ def test_what_cannot_be_mapped_is_refused_with_its_name(case: str) -> None:
 def test_every_problem_is_listed_at_once_and_the_ignorable_parts_can_be_left_out() -> None:
     xml = pendulum(
         inside='<geom name="drum" type="cylinder" size="0.1 0.05" pos="0 0 -0.5"/>',
-        joints='<joint name="pivot" axis="0 1 0" frictionloss="0.1"/>',
-        after='<actuator><general name="slow" joint="pivot" dyntype="filter" dynprm="0.1"/></actuator>',
+        after='<actuator><general name="slow" joint="pivot" dyntype="filter" dynprm="0.1"/></actuator>'
+        '<tendon><fixed name="rope" frictionloss="0.1"><joint joint="pivot" coef="1"/></fixed></tendon>',
         option="",
     )
     with pytest.raises(InputError) as caught:
         from_mjcf(xml)
-    for word in ("frictionloss", "actuator 'slow'", "'floor'–'drum'"):
+    for word in ("'rope' have frictionloss", "actuator 'slow'", "'floor'–'drum'"):
         assert word in str(caught.value)
     with pytest.raises(InputError, match="actuators must be one of"):
         from_mjcf(xml, actuators="keep")
     with pytest.raises(InputError, match="frictionloss"):
         from_mjcf(xml, actuators="ignore", contacts="ignore")
-    machine = from_mjcf(xml.replace(' frictionloss="0.1"', ""), actuators="ignore", contacts="ignore")
+    machine = from_mjcf(xml, actuators="ignore", contacts="ignore", tendons="ignore")
     assert machine.contacts == [] and machine.model.friction == ()
 
 

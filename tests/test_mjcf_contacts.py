@@ -140,3 +140,98 @@ def test_pushed_harder_than_its_feet_can_hold_the_quadruped_slides_as_coulomb_sa
     print(f"\nslides at {accel:.12f} m/s² (Coulomb: {expected:.12f})")
     assert abs(accel - expected) <= 1e-8 * expected
     assert np.abs(traj.q[:, 1]).max() <= 1e-9  # straight along the push
+
+
+# -- the finger: cylinders beside capsules, a spinner with dry friction ----------------------------------------------
+FINGER_PAIRS = (
+    "proximal_decoration–cap1",  # a hub (cylinder) against a capsule lying in the plane normal to its axis
+    "proximal–spinner_decoration",
+    "fingertip–spinner_decoration",
+    "proximal_decoration–spinner_decoration",  # two parallel hubs
+)
+
+
+def test_the_fingers_cylinder_gaps_are_mujocos_distances() -> None:
+    """At 100 random states of dm_control's finger, each cylinder pair's gap equals MuJoCo's ``mj_geomDistance`` (its
+    convex collision, to its own tolerance); the cylinders that can never reach the floor are left out. (Where a
+    capsule can reach a cylinder's flat end the pair is refused:
+    :func:`test_a_capsule_that_can_reach_a_flat_end_is_refused`.)"""
+    import mujoco
+
+    finger = gp.from_mjcf(str(zoo() / "dm_control/finger.xml"))
+    names = {c.name: c for c in finger.contacts}
+    assert not [n for n in names if n.startswith("ground–") and "decoration" in n]
+    m = finger.mujoco_model
+    d = mujoco.MjData(m)
+    rng = np.random.default_rng(7)
+    worst = 0.0
+    for _ in range(100):
+        d.qpos[:] = m.qpos0 + rng.uniform(-2.0, 2.0, m.nq)
+        mujoco.mj_forward(m, d)
+        for pair in FINGER_PAIRS:
+            ids = [mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, g) for g in pair.split("–")]
+            distance = mujoco.mj_geomDistance(m, d, ids[0], ids[1], 10.0, np.zeros(6))
+            worst = max(worst, abs(float(names[pair].gap(d.qpos)) - distance))
+    assert worst <= 1e-9
+
+
+def test_the_spinners_dry_friction_stops_it_where_a_damper_alone_would_not() -> None:
+    """The finger's spinner set turning at 3 rad/s, the finger out of its way: its damper (0.5) slows it
+    exponentially, its ``frictionloss`` (0.1) stops it in finite time — an event "stops slipping" — and it stays
+    still after (its velocity zero to round-off)."""
+    finger = gp.from_mjcf(str(zoo() / "dm_control/finger.xml"))
+    q0, v0 = finger.initial_state()
+    v0[2] = 3.0
+    run = gp.simulate(finger.model, q0, v0, 3.0)
+    assert run.status == "success", run.message
+    stops = [e for e in run.events if e.get("kind") == "stops slipping"]
+    assert stops and abs(run.v[-1, 2]) <= 1e-12 * 3.0 and run.t[-1] > stops[0]["t"]
+    # the closed form of I θ̈ = −c θ̇ − F from 3 rad/s: stops at t* = (I/c) ln(1 + c ω₀ / F)
+    inertia = float(finger.mujoco_model.dof_armature[2]) + _spinner_inertia(finger)
+    t_stop = inertia / 0.5 * np.log(1 + 0.5 * 3.0 / 0.1)
+    assert abs(stops[0]["t"] - t_stop) <= 1e-6 * t_stop
+
+
+def _spinner_inertia(finger: gp.MJCFMachine) -> float:
+    """The spinner's moment of inertia about its hinge (MuJoCo's ``mj_fullM`` at the reference pose)."""
+    import mujoco
+
+    m = finger.mujoco_model
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    return float(M[2, 2]) - float(m.dof_armature[2])
+
+
+HUB = """
+<mujoco>
+  <option gravity="0 0 0"/>
+  <worldbody>
+    <geom name="hub" type="cylinder" size="0.1 0.05" pos="0 0 0" euler="{tilt}"/>
+    <body name="arm" pos="0.3 0 0">
+      <joint name="swing" type="hinge" axis="{axis}"/>
+      <geom name="rod" type="capsule" fromto="0 0 0 -0.15 0 0" size="0.02"/>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_a_capsule_that_can_reach_a_flat_end_is_refused() -> None:
+    """A rod swinging about the hub's axis stays beside its side: mapped, its gap MuJoCo's distance. The same rod
+    swinging about an axis across the hub's may reach its flat end: refused by name (the control of the check)."""
+    import mujoco
+
+    beside = HUB.format(tilt="0 0 0", axis="0 0 1")
+    machine = gp.from_mjcf(beside)
+    (contact,) = machine.contacts
+    m = mujoco.MjModel.from_xml_string(beside)
+    d = mujoco.MjData(m)
+    for angle in np.linspace(-1.0, 1.0, 9):
+        d.qpos[0] = angle
+        mujoco.mj_forward(m, d)
+        distance = mujoco.mj_geomDistance(m, d, 0, 1, 10.0, np.zeros(6))
+        assert abs(float(contact.gap(d.qpos)) - distance) <= 1e-9
+    with pytest.raises(gp.InputError, match="cylinder–capsule.*end or rim"):
+        gp.from_mjcf(HUB.format(tilt="0 0 0", axis="0 1 0"))

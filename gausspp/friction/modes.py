@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import IntegrationError, PainleveError
-from ..model.friction_contact import FrictionContact
+from ..model.friction_contact import FrictionContact, dry
 from .kinds import HELD, OPEN, SLIDE, STICK
 from .kinematics import ContactState
 
@@ -83,8 +83,18 @@ def solve(
     """The solution under ``modes`` with rows ``J_n x = target_n`` (closed), ``J_t x = target_t`` (sticking);
     ``None`` where the rows cannot be met."""
     cols, rows, rhs, where = [], [], [], []
+    known = np.zeros(state.A.shape[0])  # the slipping joints' dry friction: a force known in advance
     for i, kind in enumerate(modes.kinds):
         if kind == OPEN:
+            continue
+        if dry(contacts[i]):  # no normal row; sticking: the joint's velocity held, its force an unknown
+            if kind == STICK:
+                cols += list(state.Jt[i])
+                rows += list(state.Jt[i])
+                rhs += list(target_t[i])
+                where += [(i, j) for j in range(state.Jt[i].shape[0])]
+            else:
+                known -= contacts[i].bound * (modes.dirs[i] @ state.Jt[i])  # type: ignore[attr-defined]
             continue
         rows.append(state.Jn[i])
         rhs.append(target_n[i])
@@ -99,9 +109,14 @@ def solve(
         else:
             cols.append(state.Jn[i] - contacts[i].mu * modes.dirs[i] @ state.Jt[i])
             where.append((i, -1))
-    N = np.zeros(len(contacts))
+    N = np.array([c.bound if dry(c) and k != OPEN else 0.0 for c, k in zip(contacts, modes.kinds, strict=True)])
     F = [np.zeros(len(si)) for si in state.s]
+    if np.any(known):
+        x0 = x0 + np.linalg.solve(state.A, known)
     if not cols:
+        for i, kind in enumerate(modes.kinds):
+            if kind == SLIDE and dry(contacts[i]):
+                F[i] = -contacts[i].mu * N[i] * modes.dirs[i]
         return Solution(x0.copy(), N, F)
     C, R = np.array(cols).T, np.array(rows)
     AinvC = np.linalg.solve(state.A, C)
@@ -137,7 +152,7 @@ def compliance(state: ContactState, contact: FrictionContact, i: int, direction:
 def check_painleve(state: ContactState, contacts: list[FrictionContact], modes: Modes, t: float) -> None:
     """Raise :class:`~gausspp.PainleveError` for a sliding contact whose compliance ``m`` is not positive."""
     for i, kind in enumerate(modes.kinds):
-        if kind != SLIDE:
+        if kind != SLIDE or dry(contacts[i]):  # a joint's dry friction has no normal problem
             continue
         m, critical = compliance(state, contacts[i], i, modes.dirs[i])
         scale = float(state.Jn[i] @ np.linalg.solve(state.A, state.Jn[i]))
@@ -196,6 +211,9 @@ def choose(
     for i in range(len(contacts)):
         if held(contacts[i]):
             options.append((HELD,))
+        elif dry(contacts[i]):  # always engaged (outside an impact, which passes it as no candidate)
+            engaged = (SLIDE,) if i in slipping else tuple(k for k in forced.get(i, (STICK, SLIDE)) if k != OPEN)
+            options.append(engaged if i in candidates else (OPEN,))
         elif i not in candidates:
             options.append((OPEN,))
         elif contacts[i].mu_static == 0.0:  # frictionless: pushes along its normal (sliding) or lets go

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.linalg import qr
 
 from ..c_code import c_function
-from ..model.friction_contact import FrictionContact
+from ..model.friction_contact import FrictionContact, dry
 from .kinematics import ContactKinematics
 from .modes import HELD, OPEN, SLIDE, STICK
 
@@ -52,6 +52,7 @@ def _forces(
     Jn, Jt, s = ca.SX(S["Jn"]), ca.SX(S["Jt"]), ca.SX(S["s"])
     speed = 1.0 + ca.mmax(ca.fabs(v))
     cols, rows, rhs, where, dirs = [], [], [], [], []
+    known = ca.SX.zeros(v.numel())  # the slipping joints' dry friction, a known force
     for i, kind in enumerate(kinds):
         part = slice(int(o[i]), int(o[i + 1]))
         di = d[part]
@@ -61,6 +62,16 @@ def _forces(
             di = ca.if_else(size > SLIP_FLOOR * speed, along, di)
         dirs.append(di)
         if kind == OPEN:
+            continue
+        if dry(contacts[i]):  # no normal row: sticking holds the joint's velocity, slipping is a known force
+            if kind == STICK:
+                for j in range(part.start, part.stop):
+                    cols.append(Jt[j, :].T)
+                    rows.append(Jt[j, :])
+                    rhs.append(S["phit"][j])
+                    where.append((i, j - part.start))
+            else:
+                known -= contacts[i].bound * (Jt[part, :].T @ di)  # type: ignore[attr-defined]
             continue
         rows.append(Jn[i, :])
         rhs.append(S["phin"][i])
@@ -74,7 +85,7 @@ def _forces(
                 where.append((i, j - part.start))
         else:
             cols.append(Jn[i, :].T - contacts[i].mu * Jt[part, :].T @ di)
-    A, f = ca.SX(S["A"]), ca.SX(S["f"])
+    A, f = ca.SX(S["A"]), ca.SX(S["f"]) + known
     D, LT, perm = ca.ldl(A)  # A = L D Lᵀ (permuted): half the operations of a QR, and no square root — an A that
     # stops being positive definite still gives numbers, and the report's least pivot names it
 
@@ -175,7 +186,7 @@ class PhaseGraph:
             Mr, br = P["M"][list(kept), :], P["b"][list(kept)]
             u = ca.solve(Mr, br) if Mr.size1() == Mr.size2() else _least_norm(Mr, br)
             qdd = P["x0"] + P["AinvC"] @ u
-        N = [ca.SX(0)] * kin.c
+        N = [ca.SX(c.bound) if dry(c) and k != OPEN else ca.SX(0) for c, k in zip(contacts, kinds, strict=True)]
         F = [ca.SX.zeros(int(k)) for k in kin.dims]
         for (i, j), value in zip(P["where"], ca.vertsplit(u), strict=True):
             if j < 0:
@@ -191,7 +202,7 @@ class PhaseGraph:
                 continue
             if kind == OPEN:
                 events.append(S["g"][i]), self.events.append(("closes", i))
-            else:
+            elif not dry(contacts[i]):  # a joint's dry friction has no normal force to lose
                 events.append(N[i]), self.events.append(("lifts off", i))
             if contacts[i].mu_static == 0.0:  # frictionless: its slip changes nothing
                 continue

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..model.friction_contact import FrictionContact
+from ..model.friction_contact import FrictionContact, dry
 from .kinds import HELD, OPEN, SLIDE, STICK
 
 #: The inscribed polygon of a two-component cone without Clarabel.
@@ -47,6 +47,10 @@ def within_cones(
     cones, signs = [], []
     for i, kind in enumerate(kinds):
         if kind in (OPEN, HELD):
+            continue
+        if dry(contacts[i]):  # a joint's dry friction: its force within the fixed bound, no normal column
+            if kind == STICK:
+                cones.append((None, [k for k, (c, j) in enumerate(where) if c == i], contacts[i].bound))  # type: ignore[attr-defined]
             continue
         n = [k for k, (c, j) in enumerate(where) if c == i and j < 0][0]
         signs.append(n)
@@ -81,10 +85,10 @@ def _solve(u0: np.ndarray, Z: np.ndarray, cones: list, signs: list[int], tol: fl
     blocks.append(-Z[signs])
     b += list(u0[signs] + tol)
     kinds.append(clarabel.NonnegativeConeT(len(signs)))
-    for n, f, mu in cones:  # (μ N + tol, F) in the second-order cone
-        rows = np.vstack([-mu * Z[n], -Z[f]])
+    for n, f, mu in cones:  # (μ N + tol, F) in the second-order cone (N fixed at 1 for a joint's bound μ)
+        rows = np.vstack([-mu * Z[n] if n is not None else np.zeros((1, p)), -Z[f]])
         blocks.append(rows)
-        b += [mu * u0[n] + tol, *u0[f]]
+        b += [mu * (u0[n] if n is not None else 1.0) + tol, *u0[f]]
         kinds.append(clarabel.SecondOrderConeT(1 + len(f)))
     settings = clarabel.DefaultSettings()
     settings.verbose = False
@@ -105,8 +109,9 @@ def _polygon(u0: np.ndarray, Z: np.ndarray, cones: list, signs: list[int], tol: 
         else:
             angles = (2 * np.arange(FACETS) + 1) * np.pi / FACETS
             normals, reach = [np.array([np.cos(a), np.sin(a)]) for a in angles], mu * np.cos(np.pi / FACETS)
-        for normal in normals:  # normal·F − reach·N ≤ tol
-            rows.append((normal @ Z[f] - reach * Z[n])[None, :])
-            rhs.append(tol - normal @ u0[f] + reach * u0[n])
+        for normal in normals:  # normal·F − reach·N ≤ tol (N fixed at 1 for a joint's bound)
+            fixed = n is None
+            rows.append((normal @ Z[f] - (0.0 if fixed else reach * Z[n]))[None, :])
+            rhs.append(tol - normal @ u0[f] + reach * (1.0 if fixed else u0[n]))
     found = linprog(np.zeros(Z.shape[1]), A_ub=np.vstack(rows), b_ub=np.array(rhs), bounds=(None, None))
     return np.asarray(found.x) if found.status == 0 else None

@@ -9,7 +9,7 @@ import casadi as ca
 import numpy as np
 
 from ..errors import InitialDataError, IntegrationError, NonFiniteError
-from ..model.friction_contact import FrictionContact
+from ..model.friction_contact import FrictionContact, dry
 from ..model.mechanism import Mechanism
 from ..step.outcome import not_positive_definite
 from .fixed_step import Phases
@@ -178,7 +178,7 @@ class Runner:
         for i, kind in enumerate(modes.kinds):
             if kind in (OPEN, HELD):  # a bilateral row neither lifts off nor slips
                 continue
-            else:
+            if not dry(self.contacts[i]):  # a joint's dry friction has no normal force to lose
                 out.append(self._event(modes, lambda st, sol, i=i, b=force_band[i]: sol.N[i] + b, ("lifts off", i)))
             if self.contacts[i].mu_static == 0.0:  # frictionless: its slip changes nothing
                 continue
@@ -283,6 +283,7 @@ class Runner:
 
     def impact(self, t: float, st: ContactState, touching: list[int], v: np.ndarray) -> np.ndarray:
         """The velocity after an impact: Newton's ``ġ⁺ = −e ġ⁻`` (or opening) and Coulomb on the impulses."""
+        touching = [i for i in touching if not dry(self.contacts[i])]  # a bounded force gives no impulse
         e = np.array([c.restitution for c in self.contacts])
         target_n = np.where(st.gdot < 0, -e * st.gdot, 0.0)
         target_t = [np.zeros_like(si) for si in st.s]

@@ -75,6 +75,44 @@ class FrictionContact:
         return f"FrictionContact(name={self.name!r}, mu={self.mu:g}, mu_static={self.mu_static:g})"
 
 
+class JointFriction(FrictionContact):
+    """Dry friction in a joint (MuJoCo's ``frictionloss``): a generalized force along the joint's velocity, bounded
+    by a fixed ``bound`` instead of ``μ N``.
+
+    While the joint sticks (its velocity ``s = J_t v`` held at zero) the force is whatever keeps it, within
+    ``|F| ≤ bound``; while it slips ``F = −bound·sign(s)``. Among the frictional contacts it is a contact always
+    closed, with no normal row, whose normal force is the constant ``bound`` and ``μ = μ_s = 1`` — so that the
+    friction lane's modes, events (starts to slip, stops slipping) and records treat it as one; it takes no part in
+    an impact (a bounded force gives no impulse).
+
+    Parameters
+    ----------
+    slip : callable ``(q, v) -> scalar``
+        The joint's velocity (linear in ``v``).
+    bound : float
+        The largest friction force or torque, ``> 0`` and finite.
+    name : str, optional
+    """
+
+    dry = True
+
+    def __init__(self, slip: Callable[..., Any], bound: float, *, name: str | None = None) -> None:
+        label = "joint friction" if name is None else str(name)
+        value = float(number(f"JointFriction {label!r}: bound must be a finite number > 0, got {bound!r}", bound))
+        if not value > 0:
+            raise InputError(f"JointFriction {label!r}: bound must be > 0, got {bound!r}")
+        super().__init__(gap=lambda q: 0 * q[0], slip=slip, mu=1.0, name=label)
+        self.bound = value
+
+    def __repr__(self) -> str:
+        return f"JointFriction(name={self.name!r}, bound={self.bound:g})"
+
+
+def dry(contact: FrictionContact) -> bool:
+    """Whether ``contact`` is a joint's dry friction (:class:`JointFriction`), not a contact."""
+    return bool(getattr(contact, "dry", False))
+
+
 def as_contacts(where: str, contacts: Any) -> list[FrictionContact]:
     """``contacts`` as a non-empty list of :class:`FrictionContact` (one contact alone: a list of one), or an error
     naming ``where`` it was passed."""

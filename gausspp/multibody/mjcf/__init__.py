@@ -19,11 +19,13 @@ compensation, MuJoCo's inertia-box fluid forces, and the actuators driven by ``c
 tendon ``range`` limits as unilateral rows — kept exactly where MuJoCo keeps them softly.
 
 **Contacts** (:mod:`.contacts`): the geom pairs MuJoCo would let collide, as hard frictional contacts
-(``machine.contacts``, :class:`gausspp.FrictionContact`), which ``gp.simulate`` takes from ``machine.model``.
+(``machine.contacts``, :class:`gausspp.FrictionContact`), which ``gp.simulate`` takes from ``machine.model``; and
+each degree of freedom's ``frictionloss`` as dry friction with that bound (:mod:`.dry_friction`,
+:class:`gausspp.JointFriction`: sticking and slipping, where MuJoCo keeps it softly).
 
 **What is refused.** Everything that puts a force MuJoCo computes into the motion is mapped or refused; nothing is
-dropped silently, and every problem is listed at once with the MuJoCo element's name: ``frictionloss`` (dry joint
-friction), activation dynamics and other actuators than the affine ones, transmissions other than a hinge, a slide
+dropped silently, and every problem is listed at once with the MuJoCo element's name: a tendon's ``frictionloss``,
+activation dynamics and other actuators than the affine ones, transmissions other than a hinge, a slide
 or a fixed tendon, spatial tendons with forces or limits, MuJoCo's ellipsoid fluid model, flexes, mocap bodies,
 plugins, inactive and ``distance``/``flex`` equalities, geom pairs other than those :mod:`.contacts` lists. The
 caller may leave out ``actuators``, ``tendons`` (their forces and limits), ``contacts`` or ``limits`` with
@@ -42,6 +44,7 @@ from ...model.model import Model
 from .actuators import actuator_forces
 from .contacts import ContactBuilder
 from .context import Loading
+from .dry_friction import joint_friction
 from .passive import passive_forces
 from .reader import EXTRA, compile_source, coordinate_names, import_mujoco, tree_bodies
 from .rows import equality_rows, limit_rows
@@ -163,6 +166,7 @@ def from_mjcf(
     if limits == "map":
         rows += limit_rows(load, tree)
     friction = ContactBuilder(load, tree).contacts() if contacts == "map" else []
+    friction += joint_friction(load, tree)
     if load.problems:
         listed = "\n".join(f"  - {p}" for p in load.problems)
         raise InputError(f"from_mjcf: the model has what gausspp cannot map:\n{listed}")
@@ -187,15 +191,10 @@ def _no_tendon_forces(load: Loading, tree: JointTree) -> tuple[Any, Any, Any]:
 def _check_unmapped(load: Loading) -> None:
     """What no part of the loader maps: listed with the others."""
     m, say = load.m, load.problem
-    fl = np.flatnonzero(np.asarray(m.dof_frictionloss) != 0)
-    if fl.size and not load.disabled("FRICTIONLOSS", "CONSTRAINT"):
-        joints = sorted({int(m.dof_jntid[d]) for d in fl})
-        say(
-            f"joint(s) {load.names.listed('joint', joints)} have frictionloss (dry joint friction, kept softly by "
-            'MuJoCo): not mapped; set it to 0 or disable it (<flag frictionloss="disable"/>)'
-        )
-    if np.any(np.asarray(getattr(m, "tendon_frictionloss", np.zeros(0))) != 0):
-        say("tendon(s) with frictionloss: not mapped")
+    rubbing = np.flatnonzero(np.asarray(getattr(m, "tendon_frictionloss", np.zeros(0))) != 0)
+    if rubbing.size and load.choices["tendons"] == "map" and not load.disabled("FRICTIONLOSS", "CONSTRAINT"):
+        listed = load.names.listed("tendon", rubbing)
+        say(f"tendon(s) {listed} have frictionloss (dry friction along a tendon): not mapped")
     if m.nflex:
         say(f"{m.nflex} flex(es) {load.names.listed('flex', range(m.nflex))}: deformable bodies are not mapped")
     if m.nplugin:

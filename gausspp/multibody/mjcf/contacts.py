@@ -40,6 +40,8 @@ import numpy as np
 
 from ...model.friction_contact import FrictionContact
 from .context import Loading
+from .cylinders import cylinder_pair
+from .segments import closest_points
 from .tree import JointTree, constant_rotation, frames
 
 PLANE, HFIELD, SPHERE, CAPSULE, ELLIPSOID, CYLINDER, BOX = 0, 1, 2, 3, 4, 5, 6
@@ -120,10 +122,14 @@ class ContactBuilder:
             if condim == 1:
                 mu = 0.0
             name = f"{na}–{nb}"
+            if gb == CYLINDER and ga != PLANE:  # the cylinder first
+                a, b, ga, gb = b, a, gb, ga
             if ga == PLANE and gb in (SPHERE, CAPSULE, BOX, ELLIPSOID):
                 out += self.on_plane(name, self.geom(a), self.geom(b), mu)
             elif ga in ROUND and gb in ROUND:
                 out.append(self.round_pair(name, self.geom(a), self.geom(b), mu))
+            elif CYLINDER in (ga, gb) and {ga, gb} <= {PLANE, SPHERE, CAPSULE, CYLINDER}:
+                out += cylinder_pair(self, name, self.geom(a), self.geom(b), mu)
             else:
                 kinds = "–".join(load.mj.mjtGeom(k).name[7:].lower() for k in (ga, gb))
                 load.problem(
@@ -185,6 +191,11 @@ class ContactBuilder:
             half = G.R[:, 2] * (G.size[1] if G.kind == CAPSULE else 0.0)
             ends.append((G.x - half, G.x + half))
         c1, c2 = closest_points(ends[0][0], ends[0][1], ends[1][0], ends[1][1])
+        return self.between(name, A, B, c1, c2, mu)
+
+    def between(self, name: str, A: Geom, B: Geom, c1: Any, c2: Any, mu: float) -> FrictionContact:
+        """The contact of two rounded surfaces about the core points ``c1`` (of ``A``) and ``c2`` (of ``B``), each at
+        its geom's radius ``size[0]`` from its core: ``g = ‖c₂ − c₁‖ − r₁ − r₂`` along ``n = (c₂ − c₁)/‖c₂ − c₁‖``."""
         d = c2 - c1
         dist = ca.norm_2(d)
         n = d / dist
@@ -197,29 +208,3 @@ class ContactBuilder:
         pa, pb = c1 + A.size[0] * n, c2 - B.size[0] * n
         rel = B.velocity(pb) - A.velocity(pa)
         return self._contact(name, gap, ca.vertcat(ca.dot(t1, rel), ca.dot(t2, rel)), mu)
-
-
-def closest_points(p1: Any, q1: Any, p2: Any, q2: Any) -> tuple[Any, Any]:
-    """The closest points of the segments ``p1q1`` and ``p2q2`` (Ericson, *Real-Time Collision Detection* §5.1.9),
-    with casadi's branches; a degenerate segment is a point."""
-    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    a, e, f = ca.dot(d1, d1), ca.dot(d2, d2), ca.dot(d2, r)
-    c, b = ca.dot(d1, r), ca.dot(d1, d2)
-    tiny = 1e-300
-
-    def clamp(x: Any) -> Any:
-        return ca.fmin(ca.fmax(x, 0), 1)
-
-    denom = a * e - b * b
-    s = ca.if_else(denom > 1e-12 * (a * e + tiny), clamp((b * f - c * e) / (denom + tiny)), 0)
-    t = (b * s + f) / (e + tiny)
-    s_lo, s_hi = clamp(-c / (a + tiny)), clamp((b - c) / (a + tiny))
-    s = ca.if_else(t < 0, s_lo, ca.if_else(t > 1, s_hi, s))
-    t = clamp(t)
-    s = ca.if_else(a > tiny, s, 0)
-    t = ca.if_else(e > tiny, t, 0)
-    s = ca.if_else(ca.logic_and(a <= tiny, e > tiny), 0, s)
-    t = ca.if_else(ca.logic_and(a <= tiny, e > tiny), clamp(f / (e + tiny)), t)
-    t = ca.if_else(ca.logic_and(e <= tiny, a > tiny), 0, t)
-    s = ca.if_else(ca.logic_and(e <= tiny, a > tiny), clamp(-c / (a + tiny)), s)
-    return p1 + d1 * s, p2 + d2 * t
