@@ -102,10 +102,15 @@ def stages_function(model: Model, method: str, kernel: CompiledKernel, solver: s
 
 
 def _build(model: Model, method: str, kernel: CompiledKernel) -> ca.Function:
+    return build_stages(model, method, _stage_function(model, kernel))
+
+
+def build_stages(model: Model, method: str, stage: ca.Function) -> ca.Function:
+    """``(t, y, f, h, stab, rtol, atol) ↦ (y_new, f_new, K, ok, margin, error norm)`` of one step of scipy's
+    ``method`` by ``stage`` (``(t, y, stab) ↦ (y', all-clear, margin)``)."""
     cls = getattr(si, method)
     A, B, C, n_stages = np.asarray(cls.A), np.asarray(cls.B), np.asarray(cls.C), int(cls.n_stages)
     n = model.nq + model.nv + model.n_lam + 2
-    stage = _stage_function(model, kernel)
     t, h, y, f, stab = ca.MX.sym("t"), ca.MX.sym("h"), ca.MX.sym("y", n), ca.MX.sym("f", n), ca.MX.sym("stab", 2)
     stages, oks = [f], []
     for s in range(1, n_stages):

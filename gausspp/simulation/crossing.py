@@ -119,16 +119,23 @@ def _normalized_rows(model: Model, t: float, y: np.ndarray) -> np.ndarray:
     bound = workspace(model).get(("crossing: A and J",), lambda: _mass_and_rows(model))
     load_inputs(bound.args, (t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], np.zeros(2)))
     bound.eval()
-    A, J = bound.output(0), bound.output(1)
-    rows = np.linalg.solve(np.linalg.cholesky(A), J.T).T
-    norms = np.linalg.norm(rows, axis=1)
-    return rows[norms > 0] / norms[norms > 0, None]
+    rows, norms = bound.output(0), bound.res[1]
+    if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(norms))):  # A not positive definite here: numpy says
+        np.linalg.cholesky(bound.output(2))
+    kept = norms > 0
+    return rows[kept] if kept.all() else rows[kept].copy()
 
 
 def _mass_and_rows(model: Model) -> Bound:
-    """``(t, q, v, λ, stab) ↦ (A, J)`` bound (the two of the step's data the watch needs)."""
+    """``(t, q, v, λ, stab) ↦ (J L⁻ᵀ with unit rows, the rows' lengths, A)`` bound, ``A = L Lᵀ`` (the Cholesky factor
+    in the graph: the watch runs at every accepted step)."""
     p = model.expressions
-    return Bound(ca.Function("mass_and_rows", model.inputs, [ca.densify(p.A), ca.densify(p.J)]))
+    A, J = ca.SX(p.A), ca.SX(p.J)
+    U = ca.chol(A)  # A = UᵀU: J L⁻ᵀ = J U⁻¹
+    rows = ca.solve(U.T, J.T).T
+    norms = ca.sqrt(ca.sum2(rows * rows))
+    unit = rows / ca.if_else(norms > 0, norms, 1)
+    return Bound(ca.Function("mass_and_rows", model.inputs, [ca.densify(unit), ca.densify(norms), ca.densify(A)]))
 
 
 def sign_changed(a: tuple[float, np.ndarray, np.ndarray], b: tuple[float, np.ndarray, np.ndarray]) -> bool | None:

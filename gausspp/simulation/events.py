@@ -27,7 +27,7 @@ import numpy as np
 
 from ..errors import GaussppError, InitialDataError, IntegrationError
 from ..model.model import Model
-from . import compiled_adaptive, lanes, recording
+from . import general_stages, lanes, recording
 from .contacts import active_set, gaps, phase_step
 from .drift import Stabilization
 from .event_watch import PhaseWatch, StepDense
@@ -161,7 +161,7 @@ class EventRun:
             t, y, inactive, self.departing, len(active), self.gaps, lambda t_, y_: rhs.evaluate(t_, y_)["u"][cols]
         )
         phase = len(self.phases) - 1
-        solver_class = compiled_adaptive.solver_class(opts.method.name, rhs)
+        solver_class = general_stages.solver_class(opts.method.name, rhs)
         if opts.dt is None:  # the same first step in any units (:mod:`.first_step`)
             first = initial_step(rhs, solver_class, t, y, options, opts.t_end - t)
             if first is not None:

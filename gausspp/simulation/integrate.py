@@ -16,7 +16,7 @@ from scipy.integrate._ivp.rk import RungeKutta
 from ..errors import GaussppError, InputError, IntegrationError, NonFiniteError
 from ..model.model import Model
 from ..workspace import workspace
-from . import compiled_adaptive, crossing, inputs
+from . import crossing, general_stages, inputs
 from . import methods as _methods
 from .compiled import rhs_function
 from .first_step import initial_step
@@ -144,7 +144,7 @@ def run_scipy(job: Job) -> Samples:
         options.update(first_step=opts.dt, max_step=opts.dt)
     if meth.name in ("Radau", "BDF"):  # implicit methods: the exact Jacobian from casadi where it exists
         options["jac"] = jacobian(rhs)
-    Solver = compiled_adaptive.solver_class(meth.name, rhs)  # noqa: N806  # a class
+    Solver = general_stages.solver_class(meth.name, rhs)  # noqa: N806  # a class
     if opts.dt is None:  # the same first step in any units (scipy's changes with the unit of time)
         options["first_step"] = initial_step(rhs, Solver, t0, y0, options, opts.t_end - t0)
         if options["first_step"] is None:
