@@ -4,6 +4,7 @@ tolerances: the same steps to round-off, the same states at the record times, th
 from __future__ import annotations
 
 import re
+import warnings
 from typing import Any
 
 import casadi as ca
@@ -205,3 +206,42 @@ def test_a_solver_retargeted_stops_there_and_goes_on(method: str) -> None:
     assert h_before is not None and h_before > 0
     solver.retarget(0.75)  # behind it: nothing to do
     assert solver.status == "finished"
+
+
+@pytest.mark.parametrize("name", ["four-bar-redundant", "saturated-crane"])
+def test_the_general_steps_compiled_stages_give_scipys_trajectory(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A model of the general kind (redundant rows; a bounded actuator that saturates) takes DOP853's stages as one
+    call around its compiled general step: the same steps as scipy's stages through the Python right-hand side, and
+    the same motion to round-off. The control: the compiled stages with their step length halved inside (a wrong
+    tableau) give another motion, which the comparison tells apart."""
+    from gausspp.simulation import general_stages
+
+    scene = gp.scenes.get(name)
+    t_end, grid = 1.0, np.linspace(0.0, 1.0, 11)
+    compiled = gp.simulate(scene.model, scene.q0, scene.v0, t_end, record=grid)
+    assert general_stages.applies("DOP853", _general_rhs(scene.model))
+    with monkeypatch.context() as patch:
+        patch.setattr(general_stages, "applies", lambda method, rhs: False)
+        python = gp.simulate(scene.model, scene.q0, scene.v0, t_end, record=grid)
+    assert compiled.steps == python.steps and compiled.status == python.status == "success"
+    size = np.abs(python.q).max()
+    assert np.abs(compiled.q - python.q).max() <= 1e-9 * size
+    original = general_stages.build_stages
+
+    def halved(model: Any, method: str, stage: Any) -> Any:
+        fn = original(model, method, stage)
+        t, y, f, h, stab, rtol, atol = (ca.MX.sym(n, fn.size_in(i)) for i, n in enumerate(fn.name_in()))
+        return ca.Function("halved", [t, y, f, h, stab, rtol, atol], fn(t, y, f, 0.5 * h, stab, rtol, atol))
+
+    fresh = gp.scenes.get(name)  # a new model: its stages are built anew, by the wrong builder
+    with monkeypatch.context() as patch, warnings.catch_warnings():
+        warnings.simplefilter("ignore", gp.DriftWarning)  # the wrong motion leaves its rows, as it should
+        patch.setattr(general_stages, "build_stages", halved)
+        wrong = gp.simulate(fresh.model, fresh.q0, fresh.v0, t_end, record=grid, throw=False)
+    assert wrong.t.size != python.t.size or np.abs(wrong.q - python.q).max() > 1e-6 * size
+
+
+def _general_rhs(model: gp.Model) -> Any:
+    from gausspp.simulation.rhs import GeneralRightHandSide
+
+    return GeneralRightHandSide(model, None, Stabilization())
