@@ -116,3 +116,47 @@ def projection_function(model: Model, newton_steps: int = 3) -> ca.Function:
     AinvD = ca.solve(A, D)
     v_new = v - AinvD @ ca.solve(J @ AinvD, Phi)
     return ca.Function("project", [t, q, v, lam], [q_new, v_new])
+
+
+#: The least-squares projection's Tikhonov term, relative to the largest eigenvalue of the rows' Gram matrix (rows
+#: of unit length): far below the square of any angle at which rows count as independent.
+LS_REGULARIZATION = 1e-14
+
+
+def least_squares_projection_function(model: Model, newton_steps: int = 6) -> ca.Function:
+    """``(t, q, v, lam) -> (q', v', g', Φ')``: :func:`projection_function` for dependent (redundant) rows, whose
+    square solves are singular. Each Newton step takes the least-norm correction along ``A⁻¹D``,
+    ``u = Mᵀ(M Mᵀ + εI)⁻¹ r`` with ``M = J A⁻¹ D`` and ``r`` each scaled to unit rows (rows of different units weigh
+    the same) and ``ε`` :data:`LS_REGULARIZATION` of ``M Mᵀ``'s largest diagonal entry; the residuals at the
+    projected state come out with it, so that the caller can tell a projection that did not converge (a state near
+    a singular position, where the least-norm step is not the nearest state) and take the careful one."""
+    mech, p = model.mechanism, model.expressions
+    t, q, v, lam = mech.t, mech.q, mech.v, model.lam
+    zero = ca.SX.zeros(2)
+    assert p.g is not None
+    pieces = ca.Function("pieces", [t, q, v, lam, model.stab], [p.A, p.J, p.D, p.Phi, p.g])
+    K = ca.Function("K", [q, v, t], [ca.jacobian(mech.qdot, v)])
+    rows = model.holonomic_rows
+    cols = [c for grp in model.groups if grp.rows.start in rows for c in range(grp.cols.start, grp.cols.stop)]
+
+    def least_norm(J: ca.SX, D: ca.SX, A: ca.SX, r: ca.SX) -> ca.SX:
+        AinvD = ca.solve(A, D)
+        M = J @ AinvD
+        norms = ca.sqrt(ca.sum2(M * M))
+        norms = ca.if_else(norms > 0, norms, 1)
+        Mn, rn = M / ca.repmat(norms, 1, M.size2()), r / norms
+        G = Mn @ Mn.T
+        eps = LS_REGULARIZATION * ca.mmax(ca.diag(G))
+        return AinvD @ (Mn.T @ ca.solve(G + eps * ca.SX.eye(G.size1()), rn))
+
+    q_new = q
+    if rows:
+        for _ in range(newton_steps):
+            A, J, D, _, g = pieces(t, q_new, v, lam, zero)
+            q_new = mech.normalize(q_new - K(q_new, v, t) @ least_norm(J[rows, :], D[:, cols], A, g[rows]))
+    v_new = v
+    for _ in range(2):  # affine in v: the second step takes what the Tikhonov term left
+        A, J, D, Phi, _ = pieces(t, q_new, v_new, lam, zero)
+        v_new = v_new - least_norm(J, D, A, Phi)
+    _, _, _, Phi_new, g_new = pieces(t, q_new, v_new, lam, zero)
+    return ca.Function("project_ls", [t, q, v, lam], [q_new, v_new, g_new, Phi_new])

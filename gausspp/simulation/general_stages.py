@@ -28,7 +28,7 @@ from ..step.general.compiled import GeneralCall
 from ..workspace import workspace
 from . import compiled_adaptive
 from .compiled_adaptive import METHODS, CompiledRungeKutta, build_stages
-from .rhs import GeneralRightHandSide
+from .rhs import GeneralRightHandSide, loose_call
 
 
 def solver_class(method: str, rhs: Any) -> Any:
@@ -80,7 +80,8 @@ class GeneralRungeKutta(CompiledRungeKutta):
             return self._last_bound
         model, method = self.rhs.model, self._method
         key = ("general adaptive stages", method, call.solver, call.pattern)
-        bound: Bound = workspace(model).get(key, lambda: Bound(build_stages(model, method, _stage(model, call))))
+        loose = loose_call(model, call)
+        bound: Bound = workspace(model).get(key, lambda: Bound(build_stages(model, method, _stage(model, loose))))
         s: Any = self
         bound.args[5][0] = s.rtol
         bound.args[6][:] = np.broadcast_to(s.atol, bound.args[6].shape)

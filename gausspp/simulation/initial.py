@@ -14,8 +14,9 @@ import numpy as np
 from ..errors import GaussppError, InitialDataError, RealizabilityWarning
 from ..model.model import Model
 from ..model.run_scales import RunScales, row_scales, within
+from ..step.bound import Bound, load_inputs
 from ..workspace import workspace
-from .drift import projection_function
+from .drift import least_squares_projection_function, projection_function
 
 #: ``(t, q, v, λ) ↦ (q', v')``: a projection onto the constraint.
 Projection = Callable[[float, np.ndarray, np.ndarray, np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -50,15 +51,42 @@ def redundant_rows(
 
 
 def projection(model: Model, redundant: bool = False) -> Projection:
-    """The projection onto the constraints along ``A⁻¹D``: compiled (kept in the model's workspace), or
-    (redundant rows, where the compiled one's square solves are singular) the model's least-squares Newton."""
+    """The projection onto the constraints along ``A⁻¹D``: compiled (kept in the model's workspace); for redundant
+    rows, where its square solves are singular, the compiled least-norm Newton
+    (:func:`~gausspp.simulation.drift.least_squares_projection_function`), and the model's careful one
+    (:meth:`Model.nearest_on_manifold`: the clearly independent rows first) where that one does not bring the
+    residuals down by :data:`LS_CONVERGED`."""
     if redundant:
-        return model.nearest_on_manifold
+        return _least_squares_projection(model)
     fn = workspace(model).get(("projection",), lambda: projection_function(model))
 
     def project(t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         q1, v1 = fn(t, q, v, lam)
         return np.array(q1).ravel(), np.array(v1).ravel()
+
+    return project
+
+
+#: A least-norm projection whose residuals end below this fraction of where they started has converged (Newton's
+#: steps from a drift the default control acts on reach round-off: many orders below).
+LS_CONVERGED = 1e-3
+
+
+def _least_squares_projection(model: Model) -> Projection:
+    build = lambda: Bound(least_squares_projection_function(model))  # noqa: E731
+    bound = workspace(model).get(("projection", "least squares"), build)
+    nq, nv = model.nq, model.nv
+
+    def project(t: float, q: np.ndarray, v: np.ndarray, lam: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        load_inputs(bound.args, (t, q, v, lam))
+        bound.eval()
+        q1, v1, g1, phi1 = (r.copy() for r in bound.res)
+        before = residuals(model, t, q, v, lam)
+        start = max(float(np.abs(before[0]).max(initial=0.0)), float(np.abs(before[1]).max(initial=0.0)))
+        end = max(float(np.abs(g1[model.holonomic_rows]).max(initial=0.0)), float(np.abs(phi1).max(initial=0.0)))
+        if np.all(np.isfinite(q1)) and np.all(np.isfinite(v1)) and end <= LS_CONVERGED * start:
+            return q1[:nq], v1[:nv]
+        return model.nearest_on_manifold(t, q, v, lam)
 
     return project
 

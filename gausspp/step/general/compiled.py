@@ -174,7 +174,8 @@ def _chol_pivots(G: ca.SX) -> ca.SX:
 class _Graph:
     """The symbolic pieces of one pattern's step (see the module docstring)."""
 
-    def __init__(self, model: StepModel, pat: Pattern, consistency_tol: float) -> None:
+    def __init__(self, model: StepModel, pat: Pattern, consistency_tol: float, cap: float = SLACK_CAP) -> None:
+        self.cap = cap
         p, c = model.expressions, model.contact_expressions
         k = model.k
         cl = list(pat.closed)
@@ -242,7 +243,7 @@ class _Graph:
         p = model.expressions
         K, k = self.K, model.k
         checks: list[ca.SX] = []
-        slack = ca.fmin(DRIFT_SLACK * self.drift, SLACK_CAP)  # off the manifold by δ: O(δ) (module docstring)
+        slack = ca.fmin(DRIFT_SLACK * self.drift, self.cap)  # off the manifold by δ: O(δ) (module docstring)
         eq = [i for i in range(k) if not track[i]]
         dropped = [i for i in eq if i not in K]
         if K:
@@ -382,19 +383,23 @@ def _carry(model: StepModel, pat: Pattern, gr: _Graph) -> dict[str, Any]:
 class GeneralCall:
     """One pattern's compiled general step, called through bound buffers (see the module docstring)."""
 
-    def __init__(self, model: StepModel, pat: Pattern, backend: QPBackend, consistency_tol: float) -> None:
+    def __init__(
+        self, model: StepModel, pat: Pattern, backend: QPBackend, consistency_tol: float, cap: float = SLACK_CAP
+    ) -> None:
         assert isinstance(backend, CasadiConic)
         self.pattern, self.backend = pat, backend
+        self.model, self.consistency_tol = model, consistency_tol
         self.nv, self.nq, self.k, self.m = model.nv, model.nq, model.k, model.m
         self.nc_all = len(model.contact_row_names)
         #: the pattern of a large redundant linkage, in its own sparsity (:mod:`.sparse_pattern`): no ``S`` output
         self.sparse = sparse_pattern.applies(model, pat.kept_rows, pat.kept_cols, pat.closed)
         self.sizes = self._sizes(model, pat)
         if self.sparse:
-            outs = sparse_pattern.sparse_step(model, pat.kept_rows, consistency_tol, max(SINGULAR_BAND, pat.floor**2))
+            band = max(SINGULAR_BAND, pat.floor**2)
+            outs = sparse_pattern.sparse_step(model, pat.kept_rows, consistency_tol, band, cap)
             fn = ca.Function("general_step_sparse", model.inputs, [ca.cse(o) for o in outs])
         else:
-            fn = self._function(model, pat, backend, consistency_tol)
+            fn = self._function(model, pat, backend, consistency_tol, cap)
         if getattr(model, "codegen", False) and fn.is_a("SXFunction"):  # as C where a compiler is (c_code)
             fn = c_function(fn) or fn
         self._bound = Bound(fn)
@@ -437,9 +442,9 @@ class GeneralCall:
             gc=self.nc_all,
         )
 
-    def _function(self, model: StepModel, pat: Pattern, backend: CasadiConic, tol: float) -> ca.Function:
+    def _function(self, model: StepModel, pat: Pattern, backend: CasadiConic, tol: float, cap: float) -> ca.Function:
         """One MX graph: the model's data and the QP's data in one SX function, the QP(s), one SX function after."""
-        gr = _Graph(model, pat, tol)
+        gr = _Graph(model, pat, tol, cap)
         ins = model.inputs
         mk, n_rows = len(gr.kc), gr.Aqp.shape[0]
         carry = _carry(model, pat, gr)

@@ -77,7 +77,7 @@ def _combination(n: int) -> np.ndarray:
     return rng.uniform(0.5, 1.5, n) * rng.choice([-1.0, 1.0], n)
 
 
-def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float) -> list[Any]:
+def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float, cap: float = SLACK_CAP) -> list[Any]:
     """The packed outputs of :data:`.compiled.FIELDS` (``S`` empty), the flag and the closed-contacts flag, as SX
     expressions of the model's inputs (module docstring). ``band``: below this smallest pivot of the kept rows'
     Gram matrix (unit diagonal) the flag is down — near a singular position the Python step answers."""
@@ -133,7 +133,7 @@ def sparse_step(model: StepModel, kept: tuple[int, ...], tol: float, band: float
     relax = ca.fmin(1, ca.sqrt(smallest) / CLEARLY_INDEPENDENT)
     singular = ca.logic_not(relax > 0)
     if D_rows:
-        slack = ca.fmin(DRIFT_SLACK * relative_drift(model), SLACK_CAP)  # off the manifold by δ: O(δ) (.compiled)
+        slack = ca.fmin(DRIFT_SLACK * relative_drift(model), cap)  # off the manifold by δ: O(δ) (.compiled)
         rho = ca.DM(_combination(len(D_rows)))
         j_rho = rho.T @ Jn[D_rows, :]
         Ainv_j = AinvJnt[:, D_rows] @ rho
