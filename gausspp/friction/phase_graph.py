@@ -53,6 +53,15 @@ def _forces(
     speed = 1.0 + ca.mmax(ca.fabs(v))
     cols, rows, rhs, where, dirs = [], [], [], [], []
     known = ca.SX.zeros(v.numel())  # the slipping joints' dry friction, a known force
+
+    def held_slip(i: int, part: slice) -> None:
+        """A sticking contact's (or joint's) slip components: each a row ``J_t q̈ = φ_t`` and its force's column."""
+        for j in range(part.start, part.stop):
+            cols.append(Jt[j, :].T)
+            rows.append(Jt[j, :])
+            rhs.append(S["phit"][j])
+            where.append((i, j - part.start))
+
     for i, kind in enumerate(kinds):
         part = slice(int(o[i]), int(o[i + 1]))
         di = d[part]
@@ -65,11 +74,7 @@ def _forces(
             continue
         if dry(contacts[i]):  # no normal row: sticking holds the joint's velocity, slipping is a known force
             if kind == STICK:
-                for j in range(part.start, part.stop):
-                    cols.append(Jt[j, :].T)
-                    rows.append(Jt[j, :])
-                    rhs.append(S["phit"][j])
-                    where.append((i, j - part.start))
+                held_slip(i, part)
             else:
                 known -= contacts[i].bound * (Jt[part, :].T @ di)  # type: ignore[attr-defined]
             continue
@@ -78,11 +83,7 @@ def _forces(
         where.append((i, -1))
         if kind == STICK:
             cols.append(Jn[i, :].T)
-            for j in range(part.start, part.stop):
-                cols.append(Jt[j, :].T)
-                rows.append(Jt[j, :])
-                rhs.append(S["phit"][j])
-                where.append((i, j - part.start))
+            held_slip(i, part)
         else:
             cols.append(Jn[i, :].T - contacts[i].mu * Jt[part, :].T @ di)
     A, f = ca.SX(S["A"]), ca.SX(S["f"]) + known
