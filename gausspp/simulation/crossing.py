@@ -82,6 +82,10 @@ WATCH_BELOW = 0.2
 #: A projection after the bridge that moves ``q`` by more than this share of the distance travelled would be a jump
 #: to another branch (they part linearly from ``t*``): refused.
 BRANCH_SHARE = 1e-2
+#: A row shorter than this share of its length at the start is scaled by that share of it, not to unit length: in
+#: joint coordinates a row can vanish whole at a singular position (:func:`_normalized_rows`), while a row's length
+#: in maximal coordinates varies by tens of percent along a motion with no singular position at all.
+FLOOR_SHARE = 0.1
 #: The watch computes an SVD of the rows at every accepted state: models up to this many coordinates.
 MAX_COORDINATES = 120
 
@@ -98,23 +102,31 @@ def applies(model: Model) -> bool:
     )
 
 
-def smallest_kept(model: Model, t: float, y: np.ndarray, rank: int | None = None) -> tuple[float, int]:
+def smallest_kept(
+    model: Model, t: float, y: np.ndarray, rank: int | None = None, floor: np.ndarray | None = None
+) -> tuple[float, int]:
     """``(σ_r, r)``: the ``r``-th singular value of the rows ``J`` normalized in the kinetic metric (``J L⁻ᵀ``,
-    ``A = L Lᵀ``, each row scaled to unit length), and ``r`` (counted at this state unless given)."""
-    rows = _normalized_rows(model, t, y)
+    ``A = L Lᵀ``, each row scaled to unit length — or by ``floor`` where its length falls below it), and ``r``
+    (counted at this state unless given)."""
+    rows = _normalized_rows(model, t, y, floor)
     sigma = np.linalg.svd(rows, compute_uv=False) if rows.size else np.zeros(0)
     if rank is None:
         rank = int(np.count_nonzero(sigma > RANK_TOL * sigma[0])) if sigma.size else 0
     return (float(sigma[rank - 1]) if 0 < rank <= sigma.size else 0.0), rank
 
 
-def smallest_pair(model: Model, t: float, y: np.ndarray, rank: int) -> tuple[float, np.ndarray, np.ndarray]:
+def smallest_pair(
+    model: Model, t: float, y: np.ndarray, rank: int, floor: np.ndarray | None = None
+) -> tuple[float, np.ndarray, np.ndarray]:
     """``(σ_r, u, v)``: :func:`smallest_kept`'s singular value with its left and right singular vectors."""
-    U, sigma, Vt = np.linalg.svd(_normalized_rows(model, t, y), full_matrices=False)
+    U, sigma, Vt = np.linalg.svd(_normalized_rows(model, t, y, floor), full_matrices=False)
     return float(sigma[rank - 1]), U[:, rank - 1], Vt[rank - 1]
 
 
-def _normalized_rows(model: Model, t: float, y: np.ndarray) -> np.ndarray:
+def _normalized_rows(model: Model, t: float, y: np.ndarray, floor: np.ndarray | None = None) -> np.ndarray:
+    """The rows ``J L⁻ᵀ``, each divided by its length — or by ``floor`` where the length falls below it: in joint
+    coordinates a row can vanish whole at a singular position (a planar loop's ``x`` row when its bars lie along
+    ``x``), and scaled to unit length it would hide the rank it loses."""
     nq, nv, nl = model.nq, model.nv, model.n_lam
     bound = workspace(model).get(("crossing: A and J",), lambda: _mass_and_rows(model))
     load_inputs(bound.args, (t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], np.zeros(2)))
@@ -122,8 +134,18 @@ def _normalized_rows(model: Model, t: float, y: np.ndarray) -> np.ndarray:
     rows, norms = bound.output(0), bound.res[1]
     if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(norms))):  # A not positive definite here: numpy says
         np.linalg.cholesky(bound.output(2))
+    if floor is not None:
+        scaled = rows * (norms / np.maximum(np.maximum(norms, floor), np.finfo(float).tiny))[:, None]
+        return scaled[(norms > 0) | (floor > 0)]
     kept = norms > 0
     return rows[kept] if kept.all() else rows[kept].copy()
+
+
+def row_lengths(model: Model, t: float, y: np.ndarray) -> np.ndarray:
+    """Each row's length in the kinetic metric, ``‖J_i L⁻ᵀ‖``, at ``(t, y)``."""
+    _normalized_rows(model, t, y)
+    bound = workspace(model).get(("crossing: A and J",), lambda: _mass_and_rows(model))
+    return bound.res[1].copy()
 
 
 def _mass_and_rows(model: Model) -> Bound:
@@ -177,7 +199,9 @@ class SingularityWatch:
 
     def __init__(self, model: Model, t0: float, y0: np.ndarray, rhs: Any = None) -> None:
         self.model, self.rhs = model, rhs
-        sigma, self.rank = smallest_kept(model, t0, y0)
+        #: a share of each row's length at the start, below which a row is scaled by it (:func:`_normalized_rows`)
+        self.floor = FLOOR_SHARE * row_lengths(model, t0, y0)
+        sigma, self.rank = smallest_kept(model, t0, y0, floor=self.floor)
         self.history: list[tuple[float, float]] = [(t0, sigma)]
         #: ``y`` at the last three samples of :attr:`history`
         self.states: list[np.ndarray] = [np.array(y0, float)]
@@ -193,13 +217,18 @@ class SingularityWatch:
         """``σ_r`` at ``(t, y)``: with independent rows the step's margin is the smallest eigenvalue of the
         normalized ``J A⁻¹ Jᵀ``, ``σ_r²`` — the last evaluation's if it was there, else one compiled step call's;
         otherwise (dependent rows, a step from Python) computed here."""
-        if self.rank == self.model.k and hasattr(self.rhs, "margin_at"):
+        if self.rank == self.model.k and hasattr(self.rhs, "margin_at") and not self._shrunk(t, y):
             margin = self.rhs.margin_at(t, y)
             if margin is None:
                 margin = self.rhs.margin(t, y)
             if np.isfinite(margin):
                 return float(np.sqrt(margin))
-        return smallest_kept(self.model, t, y, self.rank)[0]
+        return smallest_kept(self.model, t, y, self.rank, self.floor)[0]
+
+    def _shrunk(self, t: float, y: np.ndarray) -> bool:
+        """Whether a row is shorter than at the start (then the step's margin, which scales every row to unit length,
+        is not ``σ_r``)."""
+        return bool(np.any(row_lengths(self.model, t, y) < self.floor))
 
     def restart(self, t: float, y: np.ndarray) -> None:
         """A fresh trend after a bridge (the ``σ_r`` on the far side rises)."""
@@ -261,11 +290,12 @@ class SingularityWatch:
         if not (s1 < s0 and s1 < s2 and s1 < WENT_OVER_BELOW):
             return
         first, last = (
-            smallest_pair(self.model, t, y, self.rank) for t, y in ((t0, self.states[0]), (t2, self.states[2]))
+            smallest_pair(self.model, t, y, self.rank, self.floor)
+            for t, y in ((t0, self.states[0]), (t2, self.states[2]))
         )
         if sign_changed(first, last) is False:
             return  # the same sign at both ends, told: no zero or two (most dips end here, two SVDs)
-        middle = smallest_pair(self.model, t1, self.states[1], self.rank)
+        middle = smallest_pair(self.model, t1, self.states[1], self.rank, self.floor)
         before, after = sign_changed(first, middle), sign_changed(middle, last)
         if (before is True) == (after is True):
             return  # no change of sign that can be told, or two (σ_r back through zero: not one position)
