@@ -19,18 +19,22 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..step.servo_reach import ReachSizes, state_sizes
-from .run_scales import run_scales, structure
+from .run_scales import RunScales, run_scales, structure
 
 if TYPE_CHECKING:
     from .model import Model
 
 
-def reach_sizes(model: Model, t: float, q: np.ndarray, v: np.ndarray, horizon: float) -> ReachSizes:
+def reach_sizes(
+    model: Model, t: float, q: np.ndarray, v: np.ndarray, horizon: float, scales: RunScales | None = None
+) -> ReachSizes:
     """The sizes of a run of ``model`` from ``(t, q, v)`` over ``horizon`` (module docstring). A machine at rest with
     nothing to move it has no sizes of its own: then each coordinate is sized by its value (1 where it is zero, in
     whatever unit: the reach of a linear machine does not depend on it), the time by the horizon, and the speeds and
-    forces follow from those as above — consistent in any units."""
-    scales = run_scales(model, t, q, v, np.zeros(model.n_lam), horizon)
+    forces follow from those as above — consistent in any units. ``scales``: the run's, where the caller has read
+    them already."""
+    if scales is None:
+        scales = run_scales(model, t, q, v, np.zeros(model.n_lam), horizon)
     data = model.evaluate_data(t, q, v, np.zeros(model.n_lam))
     mass = np.abs(np.diag(np.asarray(data.A, float)))
     D = np.abs(np.asarray(data.D, float))

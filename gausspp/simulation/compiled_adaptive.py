@@ -211,6 +211,10 @@ class CompiledRungeKutta(Retargetable):
             y_new, f_new = res[0].copy(), res[1].copy()
             self.rhs.last_margin = (t + h, y_new, float(res[4][0])) if np.isfinite(res[4][0]) else None
             return y_new, f_new, float(res[5][0])
+        return self.scipy_stages(t, y, f, h)
+
+    def scipy_stages(self, t: float, y: np.ndarray, f: np.ndarray, h: float) -> tuple[np.ndarray, np.ndarray, float]:
+        """scipy's own ``rk_step`` through the Python right-hand side (which names a failure), and its error norm."""
         s: Any = self
         y_new, f_new = scipy_rk.rk_step(s.fun, t, y, f, h, s.A, s.B, s.C, s.K)
         scale = s.atol + np.maximum(np.abs(y), np.abs(y_new)) * s.rtol

@@ -127,13 +127,7 @@ def _normalized_rows(model: Model, t: float, y: np.ndarray, floor: np.ndarray | 
     """The rows ``J L⁻ᵀ``, each divided by its length — or by ``floor`` where the length falls below it: in joint
     coordinates a row can vanish whole at a singular position (a planar loop's ``x`` row when its bars lie along
     ``x``), and scaled to unit length it would hide the rank it loses."""
-    nq, nv, nl = model.nq, model.nv, model.n_lam
-    bound = workspace(model).get(("crossing: A and J",), lambda: _mass_and_rows(model))
-    load_inputs(bound.args, (t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], np.zeros(2)))
-    bound.eval()
-    rows, norms = bound.output(0), bound.res[1]
-    if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(norms))):  # A not positive definite here: numpy says
-        np.linalg.cholesky(bound.output(2))
+    rows, norms = _unit_rows(model, t, y)
     if floor is not None:
         scaled = rows * (norms / np.maximum(np.maximum(norms, floor), np.finfo(float).tiny))[:, None]
         return scaled[(norms > 0) | (floor > 0)]
@@ -143,9 +137,19 @@ def _normalized_rows(model: Model, t: float, y: np.ndarray, floor: np.ndarray | 
 
 def row_lengths(model: Model, t: float, y: np.ndarray) -> np.ndarray:
     """Each row's length in the kinetic metric, ``‖J_i L⁻ᵀ‖``, at ``(t, y)``."""
-    _normalized_rows(model, t, y)
+    return _unit_rows(model, t, y)[1].copy()
+
+
+def _unit_rows(model: Model, t: float, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``J L⁻ᵀ`` with unit rows and the rows' lengths (views into the bound buffers of :func:`_mass_and_rows`)."""
+    nq, nv, nl = model.nq, model.nv, model.n_lam
     bound = workspace(model).get(("crossing: A and J",), lambda: _mass_and_rows(model))
-    return bound.res[1].copy()
+    load_inputs(bound.args, (t, y[:nq], y[nq : nq + nv], y[nq + nv : nq + nv + nl], np.zeros(2)))
+    bound.eval()
+    rows, norms = bound.output(0), bound.res[1]
+    if not (np.all(np.isfinite(rows)) and np.all(np.isfinite(norms))):  # A not positive definite here: numpy says
+        np.linalg.cholesky(bound.output(2))
+    return rows, norms
 
 
 def _mass_and_rows(model: Model) -> Bound:

@@ -101,10 +101,7 @@ class GeneralRungeKutta(CompiledRungeKutta):
                 rhs.evaluations += self.n_stages
                 self.K[:] = bound.output(2)
                 return res[0].copy(), res[1].copy(), float(res[5][0])
-        s: Any = self
-        y_new, f_new = scipy_rk.rk_step(s.fun, t, y, f, h, s.A, s.B, s.C, s.K)
-        scale = s.atol + np.maximum(np.abs(y), np.abs(y_new)) * s.rtol
-        return y_new, f_new, s._estimate_error_norm(s.K, h, scale)
+        return self.scipy_stages(t, y, f, h)
 
 
 class GeneralDOP853(GeneralRungeKutta, scipy_rk.DOP853):

@@ -74,7 +74,7 @@ def run_servo(model: Model, q0: Any, v0: Any, opts: Options) -> Trajectory:
     _t, q, v, lam = model.checked_state(opts.t0, q0, v0, None)
     scales = run_scales(model, opts.t0, q, v, lam, opts.t_end - opts.t0)  # read once: the tolerances and the verdict
     atol = opts.atol if opts.atol is not None else scales.atol(opts.rtol)[: model.nq + model.nv]
-    sizes = reach_sizes(model, opts.t0, q, v, opts.t_end - opts.t0)
+    sizes = reach_sizes(model, opts.t0, q, v, opts.t_end - opts.t0, scales)
     servo = simulate_servo(model, q0, v0, opts.t_end, t0=opts.t0, record=record, rtol=opts.rtol, atol=atol, sizes=sizes)
     traj = _trajectory(model, servo)
     if servo.status == "success":
